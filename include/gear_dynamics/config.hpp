@@ -1,0 +1,62 @@
+// Configuration: the YAML sections gear_pair, load and run (config/*.yaml), read and validated
+// against one schema. Every problem is reported with the key, the value and the allowed range;
+// unknown keys inside these sections are errors (a typo must not silently fall back).
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "gear_dynamics/ensemble.hpp"
+#include "gear_dynamics/gear_pair.hpp"
+#include "gear_dynamics/simulation.hpp"
+
+namespace gear_dynamics {
+
+class ConfigError : public std::runtime_error {
+ public:
+  explicit ConfigError(const std::string& what) : std::runtime_error(what) {}
+};
+
+struct LoadSettings {
+  double initial_mean = 20.0;  // E[Phi(0)] [m/s^2]
+  double initial_sd = 5.0;     // sd of Phi(0) [m/s^2]
+  double drift = 0.0;          // lambda [m/s^3]
+  double sigma = 5.0;          // [m/s^2/sqrt(s)]
+};
+
+struct ModelConfig {
+  GearInputs gear;
+  double friction_coefficient = 0.04;  // mu [-]
+  InitialState initial;
+  LoadSettings load;
+  RunSettings run;
+  std::uint64_t seed = 20180529;
+};
+
+// Largest friction coefficient accepted anywhere (config and dynamic_reconfigure).
+constexpr double kMaxFrictionCoefficient = 0.2;
+// Largest load noise intensity accepted: 20x the paper's 5 m/s^2/sqrt(s).
+constexpr double kMaxLoadSigma = 100.0;
+// RK4 is stable for an undamped oscillator while omega h < 2 sqrt(2) (MODEL.md §5).
+constexpr double kMaxOmegaTimesStep = 2.8284271247461903;
+
+// Validates the sections gear_pair, load and run of `root`. Other top-level keys are left alone
+// (a node's namespace holds more than the model). Throws ConfigError listing every problem.
+ModelConfig parse_config(const YAML::Node& root);
+
+// Reads the files in order, later ones overriding earlier ones key by key, then parses.
+YAML::Node read_yaml_files(const std::vector<std::string>& files);
+// Overlays `overlay` onto `base` key by key (maps recursively, everything else replaced).
+void merge_yaml(YAML::Node& base, const YAML::Node& overlay);
+
+// The configuration in effect, as YAML in the files' layout (for run_info and manifests).
+YAML::Node to_yaml(const ModelConfig& config);
+
+// Checks that hold between parameters, e.g. for values changed at run time: throws ConfigError.
+void validate_consistency(const ModelConfig& config);
+
+}  // namespace gear_dynamics

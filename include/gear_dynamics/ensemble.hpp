@@ -1,0 +1,97 @@
+// The gear SDE (MODEL.md §2) for a block of realizations stepped together: structure of arrays,
+// one SIMD lane per realization, RK4 with the stiffness switches split out (MODEL.md §5).
+// A single realization is a block of one lane, so the live node, the CLI and the Monte Carlo batch
+// all run this code. Every lane's arithmetic is independent of the other lanes (the build uses
+// -ffp-contract=off), so a realization's numbers do not depend on the block it runs in.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "gear_dynamics/gear_pair.hpp"
+#include "gear_dynamics/mesh_schedule.hpp"
+#include "gear_dynamics/normal_stream.hpp"
+
+namespace gear_dynamics {
+
+// What differs between the realizations of a block.
+struct LaneSpec {
+  double mu = 0.0;               // friction coefficient [-]
+  double sigma = 0.0;            // load noise intensity [m/s^2/sqrt(s)]
+  double drift = 0.0;            // lambda [m/s^3]
+  double load_mean = 20.0;       // E[Phi(0)] [m/s^2]
+  double load_sd = 0.0;          // sd of Phi(0) [m/s^2]; Phi(0) = load_mean + load_sd * Z_0
+  std::uint64_t realization = 0; // index of the random stream
+  bool stochastic = true;        // false: no random stream at all (sigma and load_sd must be 0)
+};
+
+struct InitialState {
+  double deflection = 0.0;  // delta(0) [m]
+  double velocity = 0.0;    // delta_dot(0) [m/s]
+};
+
+// Thrown when a lane's state stops being finite.
+class DivergenceError : public std::runtime_error {
+ public:
+  DivergenceError(const std::string& what, int lane, std::uint64_t realization, double time)
+      : std::runtime_error(what), lane(lane), realization(realization), time(time) {}
+  int lane;
+  std::uint64_t realization;
+  double time;
+};
+
+class Ensemble {
+ public:
+  static constexpr int kPacket = 8;          // lanes per SIMD packet; blocks are padded to it
+  static constexpr int kNormalChunk = 256;   // steps of normals drawn per refill
+
+  Ensemble(const GearPair& gear, double time_step, const InitialState& initial,
+           std::vector<LaneSpec> lanes, std::uint64_t seed);
+
+  // Advances every lane by one grid step. Throws DivergenceError on a non-finite state.
+  void step();
+  // Back to t = 0 and the start of every random stream: the run repeats bit for bit.
+  void reset();
+
+  int lanes() const { return static_cast<int>(spec_.size()); }
+  std::int64_t step_index() const { return n_; }
+  double time() const { return static_cast<double>(n_) * h_; }
+  double time_step() const { return h_; }
+  std::uint64_t seed() const { return seed_; }
+  const GearPair& gear() const { return gear_; }
+  const MeshSchedule& mesh() const { return mesh_; }
+  const LaneSpec& lane(int i) const { return spec_[i]; }
+
+  // State of the real lanes (padding excluded).
+  auto delta() const { return delta_.head(lanes()); }
+  auto velocity() const { return velocity_.head(lanes()); }
+  auto load() const { return load_.head(lanes()); }
+
+  // Run-time changes; they take effect at the next step boundary.
+  void set_mu(int lane, double mu);
+  void set_sigma(int lane, double sigma);
+  void set_drift(int lane, double drift);
+
+ private:
+  void refill_normals();
+  void check_finite() const;
+
+  GearPair gear_;
+  MeshSchedule mesh_;
+  double h_;
+  InitialState initial_;
+  std::vector<LaneSpec> spec_;
+  std::vector<NormalStream> streams_;
+  std::uint64_t seed_;
+  std::int64_t n_ = 0;
+
+  // Padded to a multiple of kPacket.
+  Eigen::ArrayXd delta_, velocity_, load_, mu_, sigma_, drift_;
+  Eigen::ArrayXXd normals_;  // padded lanes x kNormalChunk; column j is step normals_start_ + j
+  std::int64_t normals_start_ = 0;
+};
+
+}  // namespace gear_dynamics

@@ -1,0 +1,59 @@
+// Spur gear pair: the inputs of MODEL.md §3 and every quantity derived from them.
+// SI units throughout (m, kg, s, N, rad). No ROS.
+#pragma once
+
+namespace gear_dynamics {
+
+// What a user sets (paper Table 1 plus MODEL.md's assumed values).
+struct GearInputs {
+  double density = 7800.0;             // rho [kg/m^3]
+  double youngs_modulus = 2.068e11;    // E [Pa]
+  double poisson_ratio = 0.3;          // nu [-] (MODEL.md D6; not used by ISO 6336 method B)
+  double pinion_pitch_radius = 0.020;  // r1 [m]
+  double gear_pitch_radius = 0.080;    // r2 [m]
+  double pressure_angle = 0.3490658503988659;  // alpha0 [rad] (20 deg)
+  int pinion_teeth = 20;               // Z1
+  int gear_teeth = 80;                 // Z2
+  double face_width = 0.010;           // L [m]
+  double backlash = 5.0e-5;            // b [m], half clearance (MODEL.md D7)
+  double addendum_coefficient = 1.0;   // h_a / m
+  double dedendum_coefficient = 1.25;  // h_f / m
+  double pinion_speed = 104.71975511965977;  // Omega [rad/s] (1000 rpm)
+  double damping_ratio = 0.09;         // zeta_ref [-] at the reference load
+  double reference_load = 1000.0;      // F_ref [N]
+  double mesh_phase = 0.0;             // phi0 [rad], initial mesh phase in [0, phi_n)
+};
+
+// Derived quantities, named as in MODEL.md §3.
+struct GearPair {
+  GearInputs in;
+  double module;                 // m [m]
+  double base_radius1, base_radius2;        // Rb1, Rb2 [m]
+  double tip_radius1, tip_radius2;          // ra1, ra2 [m]
+  double root_radius1, root_radius2;        // rf1, rf2 [m]
+  double base_pitch;             // pb [m]
+  double line_of_centres_length; // lp = C1C2 [m]
+  double contact_ratio;          // epsilon_alpha [-]
+  double x_a, x_b, x_p, x_d, x_e;  // contact points from C1 along the line of action [m]
+  double inertia1, inertia2;     // J1, J2 [kg m^2]
+  double half_tooth_angle1;      // theta_b1 [rad]
+  double q1, q2, q3;             // paper Eqs. 12-14 [1/kg]
+  double equivalent_mass;        // m_e = 1/q3 [kg]
+  double c0, c1;                 // friction factor f = c0 + c1 X1 [1/kg], [1/(kg m)]
+  double mesh_period_angle;      // phi_n [rad]
+  double single_pair_angle;      // phi_m [rad]
+  double iso_single_stiffness;   // c' [N/(mm um)]
+  double iso_mesh_stiffness;     // c_gamma_alpha [N/(mm um)]
+  double k1, k_mean, k2;         // mesh stiffness levels [N/m]
+  double damping_coefficient;    // alpha [N s/m^2]
+
+  // Natural frequency sqrt(Q K) of the contact for the largest Q at friction mu [rad/s].
+  double max_contact_frequency(double mu) const;
+  // Friction factor f(phi) at local mesh phase phi in [0, phi_n].
+  double friction_factor(double phi) const { return c0 + c1 * (x_b + base_radius1 * phi); }
+};
+
+// Computes every derived quantity by MODEL.md's formulas. Does not validate (see config.hpp).
+GearPair derive(const GearInputs& in);
+
+}  // namespace gear_dynamics

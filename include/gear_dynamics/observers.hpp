@@ -1,0 +1,77 @@
+// Online observers of a block of realizations (MODEL.md §8). They see every integration grid
+// point and keep a fixed amount of memory, never the path.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+namespace gear_dynamics {
+
+// Ranges of delta and delta_dot over the trailing window [t - W, t] (clipped at 0), hence the
+// instantaneous center distance d(t) = sqrt(range(delta) * range(delta_dot)) (paper Eq. 22).
+// Keeps extrema per block of `block_steps` grid points: memory is window/block + 2 blocks, the
+// update O(1) per step. The window is exact when the last observed step is a multiple of
+// block_steps; otherwise it also covers up to block_steps - 1 earlier grid points.
+class WindowRange {
+ public:
+  WindowRange(int lanes, std::int64_t window_steps, std::int64_t block_steps);
+
+  // Sample of grid step n; steps must arrive in order, one after the other.
+  void observe(std::int64_t n, const Eigen::Ref<const Eigen::ArrayXd>& delta,
+               const Eigen::Ref<const Eigen::ArrayXd>& velocity);
+  void reset();
+
+  Eigen::ArrayXd delta_range() const;
+  Eigen::ArrayXd velocity_range() const;
+  Eigen::ArrayXd center_distance() const;  // [m s^-1/2] in SI
+
+  std::int64_t block_steps() const { return block_; }
+  int capacity_blocks() const { return static_cast<int>(slot_block_.size()); }
+
+ private:
+  void reduce(Eigen::ArrayXd& dmax, Eigen::ArrayXd& dmin, Eigen::ArrayXd& vmax,
+              Eigen::ArrayXd& vmin) const;
+  std::int64_t window_, block_;
+  std::int64_t last_ = -1;
+  // Ring of per-block extrema: column k holds block slot_block_[k] (-1 = empty).
+  Eigen::ArrayXXd dmax_, dmin_, vmax_, vmin_;
+  std::vector<std::int64_t> slot_block_;
+};
+
+// t_ss: the last grid time at which |delta - b| > tolerance, 0 if none (MODEL.md §8).
+class SteadyStateTime {
+ public:
+  SteadyStateTime(int lanes, double backlash, double tolerance);
+  void observe(double t, const Eigen::Ref<const Eigen::ArrayXd>& delta);
+  void reset() { last_.setZero(); }
+  const Eigen::ArrayXd& time() const { return last_; }
+
+ private:
+  double backlash_, tolerance_;
+  Eigen::ArrayXd last_;
+};
+
+// (delta, delta_dot, Phi) of every lane at chosen grid steps.
+class Snapshots {
+ public:
+  Snapshots(int lanes, std::vector<std::int64_t> steps);
+  void observe(std::int64_t n, const Eigen::Ref<const Eigen::ArrayXd>& delta,
+               const Eigen::Ref<const Eigen::ArrayXd>& velocity,
+               const Eigen::Ref<const Eigen::ArrayXd>& load);
+  void reset() { next_ = 0; }
+
+  const std::vector<std::int64_t>& steps() const { return steps_; }
+  // Column k holds the lanes' values at steps()[k].
+  const Eigen::ArrayXXd& delta() const { return delta_; }
+  const Eigen::ArrayXXd& velocity() const { return velocity_; }
+  const Eigen::ArrayXXd& load() const { return load_; }
+  std::size_t taken() const { return next_; }
+
+ private:
+  std::vector<std::int64_t> steps_;
+  std::size_t next_ = 0;
+  Eigen::ArrayXXd delta_, velocity_, load_;
+};
+
+}  // namespace gear_dynamics

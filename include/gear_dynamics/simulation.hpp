@@ -1,0 +1,51 @@
+// Runs a block of realizations to the end time with the standard observers (MODEL.md §8) and an
+// optional decimated recording: the one driver behind the CLI, the Monte Carlo batch and the tests.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "gear_dynamics/ensemble.hpp"
+
+namespace gear_dynamics {
+
+struct RunSettings {
+  double time_step = 1.0e-6;   // h [s]
+  double duration = 0.4;       // T [s]
+  double window = 0.05;        // analysis window W, ending at T [s]
+  std::vector<double> snapshot_times{0.30, 0.33, 0.35, 0.36, 0.40};  // grid times [s]
+  double steady_state_tolerance = 0.1;       // t_ss threshold as a fraction of b
+  double steady_state_tolerance_fine = 0.05; // the secondary variant
+
+  std::int64_t steps() const;                   // N = T / h
+  std::int64_t steps_for(double t) const;       // grid index of time t
+};
+
+struct SnapshotState {
+  double time, delta, delta_dot, load;  // [s], [m], [m/s], [m/s^2]
+};
+
+// What a run leaves behind (SI).
+struct RunResult {
+  double center_distance = 0.0;         // d over [T - W, T] [m s^-1/2]
+  double delta_range = 0.0;             // max - min of delta over the window [m]
+  double delta_dot_range = 0.0;         // same for delta_dot [m/s]
+  double steady_state_time = 0.0;       // t_ss at steady_state_tolerance [s]
+  double steady_state_time_fine = 0.0;  // t_ss at steady_state_tolerance_fine [s]
+  double final_delta = 0.0, final_delta_dot = 0.0, final_load = 0.0;
+  std::vector<SnapshotState> snapshots;
+};
+
+// Called at every grid step n with n % every == 0 (n = 0 and n = N included), after the step;
+// center_distance is the instantaneous d(t) over the trailing window (SI).
+struct Recorder {
+  std::int64_t every = 0;  // 0: no recording
+  std::function<void(const Ensemble&, const Eigen::ArrayXd& center_distance)> record;
+};
+
+// Runs `ensemble` from its current state (normally t = 0) to settings.duration.
+std::vector<RunResult> simulate(Ensemble& ensemble, const RunSettings& settings,
+                                const Recorder& recorder = {});
+
+}  // namespace gear_dynamics

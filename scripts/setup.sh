@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# Installs the Debian packages gear_dynamics needs (only the missing ones) and builds the catkin
+# workspace out of the source tree (GD_WS, default ~/.cache/gear_dynamics/<repo path hash>), then
+# sources it. Sourced by reproduce.sh and test.sh.
+set -euo pipefail
+
+GD_REPO=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+# Outside the repo: a workspace inside it would make src/gear_dynamics a symlink loop for the
+# tools that follow links (rosrun's find -L).
+GD_WS=${GD_WS:-${XDG_CACHE_HOME:-$HOME/.cache}/gear_dynamics/ws-$(echo -n "$GD_REPO" | md5sum | cut -c1-12)}
+
+# catkin's helpers need Debian's python3 (with catkin_pkg, rospkg, genmsg); a pyenv or venv
+# python3 first on PATH breaks them ("No module named ..."), so Debian's goes first.
+export PATH=/usr/bin:/bin:/usr/sbin:/sbin:$PATH
+unset PYTHONPATH PYTHONHOME VIRTUAL_ENV PYENV_VERSION
+
+GD_PACKAGES=(
+  build-essential cmake catkin python3-catkin-pkg ros-core-dev ros-message-generation
+  libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
+  librosbag-dev python3-rosbag librostest-dev python3-rostest python3-rostopic python3-rosservice
+  python3-rosnode python3-rosparam rosbash rosout
+  libdiagnostic-updater-dev libdiagnostic-msgs-dev libstd-srvs-dev ros-std-srvs python3-std-srvs
+  libros-rosgraph-msgs-dev
+  libeigen3-dev librandom123-dev libtbb-dev libyaml-cpp-dev libgtest-dev libbenchmark-dev
+  python3-matplotlib python3-numpy
+)
+
+gd_install() {
+  local missing=()
+  for p in "${GD_PACKAGES[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+  if [ ${#missing[@]} -gt 0 ]; then
+    echo "setup: installing ${missing[*]}"
+    local sudo=""
+    [ "$(id -u)" -eq 0 ] || sudo=sudo
+    $sudo apt-get update -q
+    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -q --no-install-recommends "${missing[@]}"
+  fi
+}
+
+gd_build() {
+  mkdir -p "$GD_WS/src"
+  ln -sfn "$GD_REPO" "$GD_WS/src/gear_dynamics"
+  (cd "$GD_WS" && catkin_make -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 \
+     -j"$(nproc)" "$@")
+  # shellcheck disable=SC1091
+  set +u; source "$GD_WS/devel/setup.bash"; set -u
+  echo "setup: workspace $GD_WS"
+}
+
+gd_install
+gd_build

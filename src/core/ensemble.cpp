@@ -1,0 +1,139 @@
+#include "gear_dynamics/ensemble.hpp"
+
+#include <cmath>
+#include <sstream>
+
+namespace gear_dynamics {
+
+namespace {
+
+using Packet = Eigen::Array<double, Ensemble::kPacket, 1>;
+
+// Eq. 15 with MODEL.md D1/D2: backlash in stiffness and damping, Hunt-Crossley |g|.
+inline Packet acceleration(const Packet& d, const Packet& v, const Packet& load, double stiffness,
+                           const Packet& q, double b, double alpha) {
+  const Packet g = d - d.max(-b).min(b);
+  return load - q * (stiffness * g + (alpha * g.abs()) * v);
+}
+
+int padded(std::size_t lanes) {
+  return static_cast<int>((lanes + Ensemble::kPacket - 1) / Ensemble::kPacket) * Ensemble::kPacket;
+}
+
+}  // namespace
+
+Ensemble::Ensemble(const GearPair& gear, double time_step, const InitialState& initial,
+                   std::vector<LaneSpec> lanes, std::uint64_t seed)
+    : gear_(gear), mesh_(gear, time_step), h_(time_step), initial_(initial), spec_(std::move(lanes)),
+      seed_(seed) {
+  if (spec_.empty()) throw std::invalid_argument("Ensemble: a block needs at least one lane");
+  for (const LaneSpec& s : spec_) {
+    streams_.emplace_back(seed, s.realization);
+    if (!s.stochastic && (s.sigma != 0.0 || s.load_sd != 0.0))
+      throw std::invalid_argument("Ensemble: a lane without a random stream needs sigma = 0 and load_sd = 0");
+  }
+  const int p = padded(spec_.size());
+  delta_.setZero(p);
+  velocity_.setZero(p);
+  load_.setZero(p);
+  mu_.setZero(p);
+  sigma_.setZero(p);
+  drift_.setZero(p);
+  normals_.setZero(p, kNormalChunk);
+  reset();
+}
+
+void Ensemble::reset() {
+  n_ = 0;
+  for (int i = 0; i < lanes(); ++i) {
+    const LaneSpec& s = spec_[i];
+    delta_[i] = initial_.deflection;
+    velocity_[i] = initial_.velocity;
+    // Normal 0 of the stream gives Phi(0); normals 1, 2, ... drive steps 0, 1, ...
+    load_[i] = s.load_mean + s.load_sd * (s.stochastic ? streams_[i].at(0) : 0.0);
+    mu_[i] = s.mu;
+    sigma_[i] = s.sigma;
+    drift_[i] = s.drift;
+  }
+  refill_normals();
+}
+
+void Ensemble::set_mu(int lane, double mu) { spec_.at(lane).mu = mu_[lane] = mu; }
+
+void Ensemble::set_sigma(int lane, double sigma) {
+  if (!spec_.at(lane).stochastic && sigma != 0.0)
+    throw std::invalid_argument("Ensemble: lane without a random stream cannot take sigma != 0");
+  spec_[lane].sigma = sigma_[lane] = sigma;
+}
+
+void Ensemble::set_drift(int lane, double drift) { spec_.at(lane).drift = drift_[lane] = drift; }
+
+void Ensemble::refill_normals() {
+  normals_start_ = n_;
+  std::vector<double> row(kNormalChunk);
+  for (int i = 0; i < lanes(); ++i) {
+    if (!spec_[i].stochastic) continue;  // stays zero
+    streams_[i].fill(1 + static_cast<std::uint64_t>(n_), row.data(), row.size());
+    for (int j = 0; j < kNormalChunk; ++j) normals_(i, j) = row[j];
+  }
+}
+
+void Ensemble::step() {
+  if (n_ - normals_start_ >= kNormalChunk) refill_normals();
+  const StepPlan plan = mesh_.plan(n_);
+  const double b = gear_.in.backlash, alpha = gear_.damping_coefficient, q3 = gear_.q3;
+  const double sqrt_h = std::sqrt(h_);
+  const double* z_col = &normals_(0, n_ - normals_start_);
+
+  for (Eigen::Index p = 0; p < delta_.size(); p += kPacket) {
+    Packet d = delta_.segment<kPacket>(p);
+    Packet v = velocity_.segment<kPacket>(p);
+    const Packet load0 = load_.segment<kPacket>(p);
+    const Packet mu = mu_.segment<kPacket>(p);
+    const Packet z = Eigen::Map<const Packet>(z_col + p);
+    // Load (Eq. 19): exact in distribution on the grid, a straight line within the step.
+    const Packet load1 = load0 + drift_.segment<kPacket>(p) * h_ + (sigma_.segment<kPacket>(p) * sqrt_h) * z;
+
+    for (int s = 0; s < plan.segments; ++s) {
+      const StepSegment& seg = plan.segment[s];
+      const double H = (seg.end - seg.begin) * h_, half = 0.5 * H;
+      const Packet la = seg.begin == 0.0 ? load0 : Packet(load0 + seg.begin * (load1 - load0));
+      const Packet lb = seg.end == 1.0 ? load1 : Packet(load0 + seg.end * (load1 - load0));
+      const Packet lm = 0.5 * (la + lb);
+      const Packet qa = q3 + mu * seg.friction_start;
+      const Packet qm = q3 + mu * seg.friction_mid;
+      const Packet qb = q3 + mu * seg.friction_end;
+      const double K = seg.stiffness;
+
+      const Packet a1 = acceleration(d, v, la, K, qa, b, alpha);
+      const Packet v2 = v + half * a1;
+      const Packet a2 = acceleration(d + half * v, v2, lm, K, qm, b, alpha);
+      const Packet v3 = v + half * a2;
+      const Packet a3 = acceleration(d + half * v2, v3, lm, K, qm, b, alpha);
+      const Packet v4 = v + H * a3;
+      const Packet a4 = acceleration(d + H * v3, v4, lb, K, qb, b, alpha);
+      d += (H / 6.0) * (v + 2.0 * v2 + 2.0 * v3 + v4);
+      v += (H / 6.0) * (a1 + 2.0 * a2 + 2.0 * a3 + a4);
+    }
+    delta_.segment<kPacket>(p) = d;
+    velocity_.segment<kPacket>(p) = v;
+    load_.segment<kPacket>(p) = load1;
+  }
+  ++n_;
+  check_finite();
+}
+
+void Ensemble::check_finite() const {
+  // One reduction per step: NaN and inf propagate through the sum.
+  if (std::isfinite((delta_ + velocity_).sum())) return;
+  for (int i = 0; i < lanes(); ++i) {
+    if (std::isfinite(delta_[i]) && std::isfinite(velocity_[i])) continue;
+    std::ostringstream msg;
+    msg << "gear model diverged: realization " << spec_[i].realization << " (lane " << i
+        << ", mu " << spec_[i].mu << ") has delta = " << delta_[i] << " m, delta_dot = "
+        << velocity_[i] << " m/s at t = " << time() << " s";
+    throw DivergenceError(msg.str(), i, spec_[i].realization, time());
+  }
+}
+
+}  // namespace gear_dynamics

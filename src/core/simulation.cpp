@@ -1,0 +1,74 @@
+#include "gear_dynamics/simulation.hpp"
+
+#include <cmath>
+#include <numeric>
+
+#include "gear_dynamics/observers.hpp"
+
+namespace gear_dynamics {
+
+std::int64_t RunSettings::steps() const { return steps_for(duration); }
+
+std::int64_t RunSettings::steps_for(double t) const {
+  return static_cast<std::int64_t>(std::llround(t / time_step));
+}
+
+std::vector<RunResult> simulate(Ensemble& ensemble, const RunSettings& settings,
+                                const Recorder& recorder) {
+  const int lanes = ensemble.lanes();
+  const std::int64_t total = settings.steps();
+  const std::int64_t window = settings.steps_for(settings.window);
+  // Blocks that make the window exact at T and at every recorded step.
+  std::int64_t block = std::gcd(std::max<std::int64_t>(window, 1), total);
+  if (recorder.every > 0) block = std::gcd(block, recorder.every);
+  WindowRange range(lanes, window, std::max<std::int64_t>(block, 1));
+
+  const double b = ensemble.gear().in.backlash;
+  SteadyStateTime settle(lanes, b, settings.steady_state_tolerance * b);
+  SteadyStateTime settle_fine(lanes, b, settings.steady_state_tolerance_fine * b);
+  std::vector<std::int64_t> snapshot_steps;
+  for (double t : settings.snapshot_times) snapshot_steps.push_back(settings.steps_for(t));
+  Snapshots snaps(lanes, snapshot_steps);
+
+  // Only the windows that are ever read need the sliding observer: the last one, or all of them
+  // when recording.
+  const std::int64_t range_from = recorder.every > 0 ? 0 : total - window;
+  const auto observe = [&](std::int64_t n) {
+    const double t = ensemble.time();
+    if (n >= range_from) range.observe(n, ensemble.delta(), ensemble.velocity());
+    settle.observe(t, ensemble.delta());
+    settle_fine.observe(t, ensemble.delta());
+    snaps.observe(n, ensemble.delta(), ensemble.velocity(), ensemble.load());
+    if (recorder.every > 0 && n % recorder.every == 0) recorder.record(ensemble, range.center_distance());
+  };
+
+  observe(ensemble.step_index());
+  while (ensemble.step_index() < total) {
+    ensemble.step();
+    observe(ensemble.step_index());
+  }
+
+  const Eigen::ArrayXd d = range.center_distance();
+  const Eigen::ArrayXd dr = range.delta_range();
+  const Eigen::ArrayXd vr = range.velocity_range();
+  std::vector<RunResult> results(lanes);
+  for (int i = 0; i < lanes; ++i) {
+    RunResult& r = results[i];
+    r.center_distance = d[i];
+    r.delta_range = dr[i];
+    r.delta_dot_range = vr[i];
+    r.steady_state_time = settle.time()[i];
+    r.steady_state_time_fine = settle_fine.time()[i];
+    r.final_delta = ensemble.delta()[i];
+    r.final_delta_dot = ensemble.velocity()[i];
+    r.final_load = ensemble.load()[i];
+    for (std::size_t k = 0; k < snaps.taken(); ++k) {
+      const auto kk = static_cast<Eigen::Index>(k);
+      r.snapshots.push_back({static_cast<double>(snapshot_steps[k]) * settings.time_step,
+                             snaps.delta()(i, kk), snaps.velocity()(i, kk), snaps.load()(i, kk)});
+    }
+  }
+  return results;
+}
+
+}  // namespace gear_dynamics

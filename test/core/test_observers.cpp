@@ -1,0 +1,144 @@
+// Observers on synthetic signals with known answers.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "gear_dynamics/ensemble.hpp"
+#include "gear_dynamics/observers.hpp"
+#include "gear_dynamics/simulation.hpp"
+
+namespace gd = gear_dynamics;
+
+namespace {
+
+// Two lanes of deterministic but irregular signals.
+double sig_d(std::int64_t n, int lane) { return std::sin(0.013 * n + lane) + 0.3 * std::cos(0.0071 * static_cast<double>((n * n) % 97)); }
+double sig_v(std::int64_t n, int lane) { return std::cos(0.029 * n - lane) * (1.0 + 0.001 * n); }
+
+}  // namespace
+
+TEST(WindowRange, MatchesBruteForceAtBlockBoundaries) {
+  const std::int64_t window = 120, block = 40;
+  gd::WindowRange range(2, window, block);
+  EXPECT_LE(range.capacity_blocks(), window / block + 2);
+  for (std::int64_t n = 0; n <= 1000; ++n) {
+    Eigen::ArrayXd d(2), v(2);
+    for (int l = 0; l < 2; ++l) {
+      d[l] = sig_d(n, l);
+      v[l] = sig_v(n, l);
+    }
+    range.observe(n, d, v);
+    if (n % block != 0) continue;
+    for (int l = 0; l < 2; ++l) {
+      double dmax = -1e300, dmin = 1e300, vmax = -1e300, vmin = 1e300;
+      for (std::int64_t k = std::max<std::int64_t>(0, n - window); k <= n; ++k) {
+        dmax = std::max(dmax, sig_d(k, l));
+        dmin = std::min(dmin, sig_d(k, l));
+        vmax = std::max(vmax, sig_v(k, l));
+        vmin = std::min(vmin, sig_v(k, l));
+      }
+      ASSERT_EQ(range.delta_range()[l], dmax - dmin) << "n " << n;
+      ASSERT_EQ(range.velocity_range()[l], vmax - vmin) << "n " << n;
+      ASSERT_EQ(range.center_distance()[l], std::sqrt((dmax - dmin) * (vmax - vmin)));
+    }
+  }
+}
+
+TEST(WindowRange, WindowEdgesAreInclusive) {
+  // A spike exactly at the window's first point counts; one just before it does not.
+  const std::int64_t window = 50, block = 10;
+  for (const std::int64_t spike : {50, 49}) {
+    gd::WindowRange range(1, window, block);
+    for (std::int64_t n = 0; n <= 100; ++n) {
+      Eigen::ArrayXd d = Eigen::ArrayXd::Constant(1, n == spike ? 1.0 : 0.0);
+      range.observe(n, d, Eigen::ArrayXd::Constant(1, 1.0));
+    }
+    EXPECT_EQ(range.delta_range()[0], spike == 50 ? 1.0 : 0.0) << "spike at " << spike;
+    EXPECT_EQ(range.velocity_range()[0], 0.0);
+  }
+  // Before the window has filled, it starts at t = 0.
+  gd::WindowRange early(1, window, block);
+  for (std::int64_t n = 0; n <= 20; ++n)
+    early.observe(n, Eigen::ArrayXd::Constant(1, static_cast<double>(n)), Eigen::ArrayXd::Constant(1, -2.0 * n));
+  EXPECT_EQ(early.delta_range()[0], 20.0);
+  EXPECT_EQ(early.velocity_range()[0], 40.0);
+}
+
+TEST(SteadyStateTime, LastExcursionBeyondTolerance) {
+  gd::SteadyStateTime settle(2, 1.0, 0.1);
+  for (int n = 0; n <= 100; ++n) {
+    Eigen::ArrayXd d(2);
+    d[0] = n <= 60 ? 1.5 : 1.05;  // last excursion at n = 60
+    d[1] = 1.0;                   // never away from b
+    settle.observe(n * 0.01, d);
+  }
+  EXPECT_DOUBLE_EQ(settle.time()[0], 0.60);
+  EXPECT_EQ(settle.time()[1], 0.0);
+}
+
+TEST(Snapshots, TakesExactlyTheRequestedGridSteps) {
+  gd::Snapshots snaps(1, {0, 5, 9});
+  for (std::int64_t n = 0; n <= 10; ++n) {
+    const Eigen::ArrayXd x = Eigen::ArrayXd::Constant(1, static_cast<double>(n));
+    snaps.observe(n, x, 2.0 * x, 3.0 * x);
+  }
+  ASSERT_EQ(snaps.taken(), 3u);
+  EXPECT_EQ(snaps.delta()(0, 1), 5.0);
+  EXPECT_EQ(snaps.velocity()(0, 2), 18.0);
+  EXPECT_EQ(snaps.load()(0, 0), 0.0);
+}
+
+// simulate(): the window range at T and the snapshots equal a brute-force pass over the path.
+TEST(Simulate, ObserversAgreeWithTheFullPath) {
+  const gd::GearPair g = gd::derive(gd::GearInputs{});
+  std::vector<gd::LaneSpec> lanes(3);
+  for (int i = 0; i < 3; ++i) {
+    lanes[i].mu = 0.02 * i;
+    lanes[i].sigma = 5.0;
+    lanes[i].load_sd = 5.0;
+    lanes[i].realization = i;
+  }
+  gd::RunSettings run;
+  run.duration = 0.02;
+  run.window = 0.005;
+  run.snapshot_times = {0.01, 0.017, 0.02};
+
+  gd::Ensemble a(g, 1e-6, {}, lanes, 11);
+  gd::Recorder rec;
+  rec.every = 250;
+  int records = 0;
+  Eigen::ArrayXd d_live;
+  rec.record = [&](const gd::Ensemble&, const Eigen::ArrayXd& d) {
+    ++records;
+    d_live = d;
+  };
+  const auto results = gd::simulate(a, run, rec);
+  EXPECT_EQ(records, 20000 / 250 + 1);
+
+  gd::Ensemble b(g, 1e-6, {}, lanes, 11);
+  Eigen::ArrayXd dmax = Eigen::ArrayXd::Constant(3, -1e300), dmin = -dmax, vmax = dmax, vmin = -dmax;
+  Eigen::ArrayXd last_out = Eigen::ArrayXd::Zero(3);
+  std::vector<Eigen::ArrayXd> snap;
+  const double b_lash = g.in.backlash;
+  for (std::int64_t n = 0; n <= 20000; ++n) {
+    if (n > 0) b.step();
+    if (n >= 15000) {
+      dmax = dmax.max(b.delta());
+      dmin = dmin.min(b.delta());
+      vmax = vmax.max(b.velocity());
+      vmin = vmin.min(b.velocity());
+    }
+    for (int i = 0; i < 3; ++i)
+      if (std::abs(b.delta()[i] - b_lash) > 0.1 * b_lash) last_out[i] = b.time();
+    if (n == 10000 || n == 17000 || n == 20000) snap.push_back(b.delta());
+  }
+  for (int i = 0; i < 3; ++i) {
+    const double d = std::sqrt((dmax[i] - dmin[i]) * (vmax[i] - vmin[i]));
+    EXPECT_EQ(results[i].center_distance, d);
+    EXPECT_EQ(d_live[i], d);  // the live d(T) over the trailing window is the same number
+    EXPECT_EQ(results[i].steady_state_time, last_out[i]);
+    ASSERT_EQ(results[i].snapshots.size(), 3u);
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(results[i].snapshots[k].delta, snap[k][i]);
+    EXPECT_DOUBLE_EQ(results[i].snapshots[1].time, 0.017);
+  }
+}
