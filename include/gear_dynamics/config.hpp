@@ -56,6 +56,11 @@ void merge_yaml(YAML::Node& base, const YAML::Node& overlay);
 // The configuration in effect, as YAML in the files' layout (for run_info and manifests).
 YAML::Node to_yaml(const ModelConfig& config);
 
+// The lane of stochastic realization `realization`, or the deterministic lane (Phi = initial_mean,
+// no random stream), at friction `mu` with the load settings of `config`.
+LaneSpec stochastic_lane(const ModelConfig& config, double mu, std::uint64_t realization);
+LaneSpec deterministic_lane(const ModelConfig& config, double mu);
+
 // Checks that hold between parameters, e.g. for values changed at run time: throws ConfigError.
 void validate_consistency(const ModelConfig& config);
 

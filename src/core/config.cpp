@@ -341,4 +341,23 @@ YAML::Node to_yaml(const ModelConfig& config) {
   return root;
 }
 
+LaneSpec stochastic_lane(const ModelConfig& config, double mu, std::uint64_t realization) {
+  LaneSpec s;
+  s.mu = mu;
+  s.sigma = config.load.sigma;
+  s.drift = config.load.drift;
+  s.load_mean = config.load.initial_mean;
+  s.load_sd = config.load.initial_sd;
+  s.realization = realization;
+  return s;
+}
+
+LaneSpec deterministic_lane(const ModelConfig& config, double mu) {
+  LaneSpec s;
+  s.mu = mu;
+  s.load_mean = config.load.initial_mean;
+  s.stochastic = false;
+  return s;
+}
+
 }  // namespace gear_dynamics

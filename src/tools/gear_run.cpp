@@ -92,22 +92,11 @@ int main(int argc, char** argv) try {
   std::vector<gd::LaneSpec> lanes;
   std::vector<std::string> names;
   if (opt.deterministic) {
-    gd::LaneSpec s1;
-    s1.mu = cfg.friction_coefficient;
-    s1.load_mean = cfg.load.initial_mean;
-    s1.stochastic = false;
-    lanes.push_back(s1);
+    lanes.push_back(gd::deterministic_lane(cfg, cfg.friction_coefficient));
     names.push_back("S1");
   }
   for (int r = 0; r < opt.realizations; ++r) {
-    gd::LaneSpec s;
-    s.mu = cfg.friction_coefficient;
-    s.sigma = cfg.load.sigma;
-    s.drift = cfg.load.drift;
-    s.load_mean = cfg.load.initial_mean;
-    s.load_sd = cfg.load.initial_sd;
-    s.realization = static_cast<std::uint64_t>(r);
-    lanes.push_back(s);
+    lanes.push_back(gd::stochastic_lane(cfg, cfg.friction_coefficient, static_cast<std::uint64_t>(r)));
     names.push_back("r" + std::to_string(r));
   }
   if (lanes.empty()) throw std::runtime_error("nothing to run: --no-deterministic with --realizations 0");

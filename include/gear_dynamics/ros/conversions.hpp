@@ -1,0 +1,43 @@
+// What every node of this package shares at the ROS boundary: reading the model configuration
+// from the parameter server through the core's validator, the simulated-time clock offset, and
+// the conversions from core results to this package's messages. The core library stays ROS-free.
+#pragma once
+
+#include <ros/node_handle.h>
+#include <ros/time.h>
+
+#include <string>
+
+#include "gear_dynamics/GearState.h"
+#include "gear_dynamics/RunInfo.h"
+#include "gear_dynamics/RunSummary.h"
+#include "gear_dynamics/config.hpp"
+#include "gear_dynamics/ensemble.hpp"
+#include "gear_dynamics/simulation.hpp"
+
+namespace gear_dynamics {
+
+// Simulated time t maps to ROS time t + kClockOffset: /clock never reads 0 (ROS takes 0 as "no
+// time yet") and rosbag accepts every stamp (it refuses times before 1 ns).
+constexpr double kClockOffset = 1.0;  // [s]
+inline ros::Time sim_stamp(double t) { return ros::Time(kClockOffset + t); }
+
+// The sections gear_pair, load and run of `nh`'s namespace (normally the private one, filled from
+// config/*.yaml by the launch file) as YAML, then validated by parse_config. Throws ConfigError.
+YAML::Node yaml_from_parameters(const ros::NodeHandle& nh, const std::vector<std::string>& sections);
+ModelConfig load_model_config(const ros::NodeHandle& nh);
+
+// Run kinds as written in RunInfo.kind and RunSummary.kind.
+constexpr const char* kKindS1 = "S1";
+constexpr const char* kKindPhase = "phase";
+constexpr const char* kKindStochastic = "stochastic";
+
+RunInfo make_run_info(const ModelConfig& config, const std::string& kind, std::uint32_t realization,
+                      double mu, double sigma, double duration);
+// State of `lane` now; center_distance is the instantaneous d(t) (SI).
+GearState make_state(const Ensemble& ensemble, int lane, double center_distance);
+RunSummary make_summary(const std::string& run_name, const std::string& kind,
+                        std::uint32_t realization, double mu, double mesh_phase,
+                        const RunSettings& run, const RunResult& result);
+
+}  // namespace gear_dynamics

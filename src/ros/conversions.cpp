@@ -1,0 +1,115 @@
+#include "gear_dynamics/ros/conversions.hpp"
+
+#include <xmlrpcpp/XmlRpcValue.h>
+
+namespace gear_dynamics {
+
+namespace {
+
+YAML::Node to_yaml(XmlRpc::XmlRpcValue& v) {
+  switch (v.getType()) {
+    case XmlRpc::XmlRpcValue::TypeBoolean:
+      return YAML::Node(static_cast<bool>(v));
+    case XmlRpc::XmlRpcValue::TypeInt:
+      return YAML::Node(static_cast<int>(v));
+    case XmlRpc::XmlRpcValue::TypeDouble:
+      return YAML::Node(static_cast<double>(v));
+    case XmlRpc::XmlRpcValue::TypeString:
+      return YAML::Node(static_cast<std::string>(v));
+    case XmlRpc::XmlRpcValue::TypeArray: {
+      YAML::Node n(YAML::NodeType::Sequence);
+      for (int i = 0; i < v.size(); ++i) n.push_back(to_yaml(v[i]));
+      return n;
+    }
+    case XmlRpc::XmlRpcValue::TypeStruct: {
+      YAML::Node n(YAML::NodeType::Map);
+      for (auto& kv : v) n[kv.first] = to_yaml(kv.second);
+      return n;
+    }
+    default:
+      return YAML::Node();  // invalid / binary / date: reported as missing or wrong type
+  }
+}
+
+}  // namespace
+
+YAML::Node yaml_from_parameters(const ros::NodeHandle& nh, const std::vector<std::string>& sections) {
+  YAML::Node root(YAML::NodeType::Map);
+  for (const std::string& s : sections) {
+    XmlRpc::XmlRpcValue v;
+    if (nh.getParam(s, v)) root[s] = to_yaml(v);
+  }
+  return root;
+}
+
+ModelConfig load_model_config(const ros::NodeHandle& nh) {
+  return parse_config(yaml_from_parameters(nh, {"gear_pair", "load", "run"}));
+}
+
+RunInfo make_run_info(const ModelConfig& config, const std::string& kind, std::uint32_t realization,
+                      double mu, double sigma, double duration) {
+  RunInfo m;
+  m.header.stamp = sim_stamp(0.0);
+  m.package_version = GEAR_DYNAMICS_VERSION;
+  m.kind = kind;
+  m.seed = config.seed;
+  m.realization = realization;
+  m.mu = mu;
+  m.sigma = sigma;
+  m.time_step = config.run.time_step;
+  m.duration = duration;
+  m.mesh_phase = config.gear.mesh_phase;
+  m.clock_offset = kClockOffset;
+  YAML::Emitter out;
+  out << to_yaml(config);
+  m.parameters_yaml = out.c_str();
+  return m;
+}
+
+GearState make_state(const Ensemble& e, int lane, double center_distance) {
+  GearState m;
+  const double t = e.time();
+  m.header.stamp = sim_stamp(t);
+  m.t = t;
+  m.delta = e.delta()[lane];
+  m.delta_dot = e.velocity()[lane];
+  m.phi = e.load()[lane];
+  m.center_distance = center_distance;
+  m.mesh_stiffness = e.mesh().stiffness(t);
+  m.mesh_phase = e.mesh().phase(t);
+  m.mu = e.lane(lane).mu;
+  m.sigma = e.lane(lane).sigma;
+  m.realization = static_cast<std::uint32_t>(e.lane(lane).realization);
+  m.seed = e.seed();
+  return m;
+}
+
+RunSummary make_summary(const std::string& run_name, const std::string& kind,
+                        std::uint32_t realization, double mu, double mesh_phase,
+                        const RunSettings& run, const RunResult& r) {
+  RunSummary m;
+  m.header.stamp = sim_stamp(run.duration);
+  m.run_name = run_name;
+  m.kind = kind;
+  m.realization = realization;
+  m.mu = mu;
+  m.mesh_phase = mesh_phase;
+  m.center_distance = r.center_distance;
+  m.delta_range = r.delta_range;
+  m.delta_dot_range = r.delta_dot_range;
+  m.steady_state_time = r.steady_state_time;
+  m.steady_state_time_fine = r.steady_state_time_fine;
+  m.reached_steady_state = r.steady_state_time < run.duration;
+  m.final_delta = r.final_delta;
+  m.final_delta_dot = r.final_delta_dot;
+  m.final_phi = r.final_load;
+  for (const SnapshotState& s : r.snapshots) {
+    m.snapshot_times.push_back(s.time);
+    m.snapshot_delta.push_back(s.delta);
+    m.snapshot_delta_dot.push_back(s.delta_dot);
+    m.snapshot_phi.push_back(s.load);
+  }
+  return m;
+}
+
+}  // namespace gear_dynamics
