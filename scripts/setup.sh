@@ -21,7 +21,7 @@ GD_PACKAGES=(
   python3-rosnode python3-rosparam rosbash rosout
   libdiagnostic-updater-dev libdiagnostic-msgs-dev libstd-srvs-dev ros-std-srvs python3-std-srvs
   libros-rosgraph-msgs-dev
-  libeigen3-dev librandom123-dev libtbb-dev libyaml-cpp-dev libgtest-dev libbenchmark-dev
+  libeigen3-dev librandom123-dev libtbb-dev libyaml-cpp-dev libgtest-dev libbenchmark-dev libboost-dev
   python3-matplotlib python3-numpy
 )
 

@@ -1,0 +1,48 @@
+// The batch report: report.md with the paper's tables beside ours, and every number as CSV, in
+// the paper's units (mm, mm/s, mm s^-1/2, mm/s^2). The figures are drawn from these CSVs by
+// scripts/plot_report.py. No ROS.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "gear_dynamics/batch_analysis.hpp"
+#include "gear_dynamics/config.hpp"
+
+namespace gear_dynamics {
+
+// SI -> the paper's units: m -> mm, m/s -> mm/s, m s^-1/2 -> mm s^-1/2 (sqrt(1e3 * 1e3)),
+// m/s^2 -> mm/s^2 (MODEL.md §1).
+constexpr double kToPaperUnits = 1e3;
+
+// A bag the reader did not use, and why.
+struct SkippedFile {
+  std::string file, reason;
+};
+
+// What reading one or more batch folders gave: the runs and everything left out.
+struct BatchInputs {
+  std::vector<std::string> folders;
+  ModelConfig config;                 // the batch's model configuration (from its manifests)
+  std::size_t expected_runs = 0;      // distinct runs listed in the manifests
+  std::vector<RunRecord> runs;        // one per usable bag
+  std::vector<SkippedFile> skipped;   // bags left out, with the reason
+  std::vector<std::string> missing;   // listed runs without a usable bag (or notes on missing shards)
+};
+
+// The paper's published numbers (Tables 3 and 4, §3.2.3), in its units, looked up by mu.
+struct PaperReference {
+  double mu;
+  double delta_T, delta_dot_T;        // Table 3 [mm], [mm/s]
+  double p_delta, p_delta_dot;        // Table 4 [%] for [0.04, 0.055] mm and [-16, 16] mm/s
+};
+const std::vector<PaperReference>& paper_reference();
+constexpr double kPaperExceedsS1 = 0.93;  // P(d > d_S1) at mu = 0.04 (93 of 100)
+constexpr double kPaperMuExceeds = 0.04;
+
+// Writes report.md and the CSV files into `folder` (created if needed). Throws std::runtime_error
+// if a file cannot be written. The names of the files written are returned.
+std::vector<std::string> write_report(const std::string& folder, const BatchInputs& inputs,
+                                      const BatchAnalysis& analysis);
+
+}  // namespace gear_dynamics

@@ -1,0 +1,266 @@
+#include "gear_dynamics/batch_analysis.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+#include "gear_dynamics/config.hpp"
+
+namespace gear_dynamics {
+
+namespace {
+
+// Snapshot times and requested joint times are both whole multiples of h computed in double.
+constexpr double kTimeMatch = 1e-9;  // [s]
+
+std::string show(const YAML::Node& n) {
+  YAML::Emitter e;
+  e << YAML::Flow << n;
+  return e.c_str();
+}
+
+// A list of `size` numbers (size 0: any non-empty length) at analysis.<key>.
+std::vector<double> number_list(const YAML::Node& section, const std::string& key, std::size_t size,
+                                const std::string& meaning, std::vector<std::string>& errors) {
+  const std::string path = "analysis." + key;
+  const YAML::Node v = section[key];
+  const std::string expected = size ? "a list of " + std::to_string(size) + " numbers " + meaning
+                                    : "a non-empty list of numbers " + meaning;
+  if (!v || !v.IsSequence() || (size && v.size() != size) || v.size() == 0) {
+    errors.push_back(path + (v ? " = " + show(v) + " has the wrong form" : " is missing") + "; expected " + expected);
+    return {};
+  }
+  std::vector<double> out;
+  for (const auto& item : v) {
+    try {
+      const double x = item.as<double>();
+      if (!std::isfinite(x)) throw YAML::Exception(YAML::Mark(), "not finite");
+      out.push_back(x);
+    } catch (const YAML::Exception&) {
+      errors.push_back(path + " = " + show(v) + " holds " + show(item) + ", not a finite number; expected " + expected);
+      return {};
+    }
+  }
+  return out;
+}
+
+Interval interval_at(const YAML::Node& section, const std::string& key, const char* unit,
+                     std::vector<std::string>& errors) {
+  const auto v = number_list(section, key, 2, std::string("[lo, hi] with lo <= hi [") + unit + "]", errors);
+  if (v.empty()) return {};
+  if (!(v[0] <= v[1])) {
+    std::ostringstream e;
+    e << "analysis." << key << " = [" << v[0] << ", " << v[1] << "] is empty; allowed lo <= hi [" << unit << "]";
+    errors.push_back(e.str());
+  }
+  return {v[0], v[1]};
+}
+
+BinSpec bins_at(const YAML::Node& section, const std::string& key, const char* unit,
+                std::vector<std::string>& errors) {
+  const auto v = number_list(section, key, 3, std::string("[lo, hi, width] [") + unit + "]", errors);
+  if (v.empty()) return {};
+  const BinSpec spec{v[0], v[1], v[2]};
+  try {
+    validate(spec, "analysis." + key);
+  } catch (const std::invalid_argument& ex) {
+    errors.emplace_back(ex.what());
+  }
+  return spec;
+}
+
+std::size_t snapshot_index(const RunRecord& r, double t) {
+  for (std::size_t k = 0; k < r.snapshot_times.size(); ++k)
+    if (std::abs(r.snapshot_times[k] - t) <= kTimeMatch) return k;
+  std::ostringstream e;
+  e << "analysis.joint_times: " << t << " s is not among the snapshot times of run " << r.name << " (";
+  for (std::size_t k = 0; k < r.snapshot_times.size(); ++k) e << (k ? ", " : "") << r.snapshot_times[k];
+  e << " s); choose joint times from the batch's run.snapshot_times";
+  throw std::invalid_argument(e.str());
+}
+
+template <class Pred>
+Proportion count_if(const std::vector<double>& v, Pred pred, double confidence) {
+  return wilson(static_cast<std::size_t>(std::count_if(v.begin(), v.end(), pred)), v.size(), confidence);
+}
+
+MuAnalysis analyse_mu(double mu, const std::vector<const RunRecord*>& runs, const AnalysisSettings& s) {
+  MuAnalysis a;
+  a.mu = mu;
+  std::vector<double> d, tss, tss_fine, fd, fv, pd, ptss, pfd, pfv;
+  std::vector<const RunRecord*> stochastic;
+  std::size_t reached = 0;
+  for (const RunRecord* r : runs) {
+    switch (r->kind) {
+      case RunKind::S1:
+        if (!a.s1) a.s1 = *r;
+        break;
+      case RunKind::Phase:
+        pd.push_back(r->center_distance);
+        ptss.push_back(r->steady_state_time);
+        pfd.push_back(r->final_delta);
+        pfv.push_back(r->final_delta_dot);
+        break;
+      case RunKind::Stochastic:
+        stochastic.push_back(r);
+        d.push_back(r->center_distance);
+        tss.push_back(r->steady_state_time);
+        tss_fine.push_back(r->steady_state_time_fine);
+        fd.push_back(r->final_delta);
+        fv.push_back(r->final_delta_dot);
+        reached += r->reached_steady_state ? 1 : 0;
+        if (r->index == 0) a.s2_center_distance = r->center_distance;
+        if (r->index == 1) a.s3_center_distance = r->center_distance;
+        break;
+    }
+  }
+  const double c = s.confidence;
+  a.stochastic_runs = d.size();
+  a.phase_runs = pd.size();
+  a.center_distance = box_stats(d, c);
+  a.steady_state_time = box_stats(tss, c);
+  a.steady_state_time_fine = box_stats(tss_fine, c);
+  a.final_delta = box_stats(fd, c);
+  a.final_delta_dot = box_stats(fv, c);
+  a.phase_center_distance = box_stats(pd, c);
+  a.phase_steady_state_time = box_stats(ptss, c);
+  a.phase_final_delta = box_stats(pfd, c);
+  a.phase_final_delta_dot = box_stats(pfv, c);
+
+  // Without its reference a comparison has no trials: estimate NaN, interval [0, 1].
+  const std::vector<double> none;
+  const double ds1 = a.s1 ? a.s1->center_distance : 0.0;
+  a.d_exceeds_s1 = count_if(a.s1 ? d : none, [&](double x) { return x > ds1; }, c);
+  const double dphase = a.phase_center_distance.median;
+  a.d_exceeds_phase_median = count_if(pd.empty() ? none : d, [&](double x) { return x > dphase; }, c);
+  a.reached_steady_state = wilson(reached, d.size(), c);
+  a.delta_in_interval = count_if(fd, [&](double x) { return s.delta_interval.contains(x); }, c);
+  a.delta_dot_in_interval = count_if(fv, [&](double x) { return s.delta_dot_interval.contains(x); }, c);
+  a.delta_pdf = histogram(fd, s.delta_bins);
+  a.delta_dot_pdf = histogram(fv, s.delta_dot_bins);
+
+  for (double t : s.joint_times) {
+    std::vector<double> x, y;
+    for (const RunRecord* r : stochastic) {
+      const std::size_t k = snapshot_index(*r, t);
+      x.push_back(r->snapshot_delta.at(k));
+      y.push_back(r->snapshot_delta_dot.at(k));
+    }
+    a.joint_pdf.push_back(histogram2d(x, y, s.joint_delta_bins, s.joint_delta_dot_bins));
+  }
+  return a;
+}
+
+}  // namespace
+
+const char* to_string(RunKind kind) {
+  switch (kind) {
+    case RunKind::S1: return "S1";
+    case RunKind::Phase: return "phase";
+    case RunKind::Stochastic: return "stochastic";
+  }
+  return "?";
+}
+
+std::optional<RunKind> run_kind_from(const std::string& text) {
+  for (RunKind k : {RunKind::S1, RunKind::Phase, RunKind::Stochastic})
+    if (text == to_string(k)) return k;
+  return std::nullopt;
+}
+
+AnalysisSettings parse_analysis_settings(const YAML::Node& root) {
+  const YAML::Node a = root["analysis"];
+  if (!a || !a.IsMap()) throw ConfigError("invalid analysis settings: missing section 'analysis' (a map)");
+  static const std::set<std::string> known = {"confidence", "delta_interval", "delta_dot_interval", "delta_bins",
+                                              "delta_dot_bins", "joint_delta_bins", "joint_delta_dot_bins", "joint_times"};
+  std::vector<std::string> errors;
+  for (const auto& kv : a) {
+    const std::string key = kv.first.as<std::string>();
+    if (!known.count(key)) {
+      std::string valid;
+      for (const auto& k : known) valid += (valid.empty() ? "" : ", ") + k;
+      errors.push_back("analysis." + key + " is not a known key (a typo?); valid keys: " + valid);
+    }
+  }
+  AnalysisSettings s;
+  try {
+    s.confidence = a["confidence"].as<double>();
+  } catch (const YAML::Exception&) {
+    s.confidence = -1.0;  // missing or not a number: reported as out of range
+  }
+  if (!(s.confidence > 0.0 && s.confidence < 1.0))
+    errors.push_back("analysis.confidence = " + (a["confidence"] ? show(a["confidence"]) : std::string("(missing)")) +
+                     " is out of range; allowed (0, 1)");
+  s.delta_interval = interval_at(a, "delta_interval", "m", errors);
+  s.delta_dot_interval = interval_at(a, "delta_dot_interval", "m/s", errors);
+  s.delta_bins = bins_at(a, "delta_bins", "m", errors);
+  s.delta_dot_bins = bins_at(a, "delta_dot_bins", "m/s", errors);
+  s.joint_delta_bins = bins_at(a, "joint_delta_bins", "m", errors);
+  s.joint_delta_dot_bins = bins_at(a, "joint_delta_dot_bins", "m/s", errors);
+  s.joint_times = number_list(a, "joint_times", 0, "[s], each >= 0", errors);
+  for (double t : s.joint_times)
+    if (t < 0) errors.push_back("analysis.joint_times holds " + std::to_string(t) + " s; allowed >= 0 s");
+  if (!errors.empty()) {
+    std::string all = "invalid analysis settings:";
+    for (const auto& m : errors) all += "\n  " + m;
+    throw ConfigError(all);
+  }
+  return s;
+}
+
+YAML::Node to_yaml(const AnalysisSettings& s) {
+  YAML::Node a;
+  const auto list = [](std::initializer_list<double> v) {
+    YAML::Node n;
+    for (double x : v) n.push_back(x);
+    n.SetStyle(YAML::EmitterStyle::Flow);
+    return n;
+  };
+  a["confidence"] = s.confidence;
+  a["delta_interval"] = list({s.delta_interval.lo, s.delta_interval.hi});
+  a["delta_dot_interval"] = list({s.delta_dot_interval.lo, s.delta_dot_interval.hi});
+  a["delta_bins"] = list({s.delta_bins.lo, s.delta_bins.hi, s.delta_bins.width});
+  a["delta_dot_bins"] = list({s.delta_dot_bins.lo, s.delta_dot_bins.hi, s.delta_dot_bins.width});
+  a["joint_delta_bins"] = list({s.joint_delta_bins.lo, s.joint_delta_bins.hi, s.joint_delta_bins.width});
+  a["joint_delta_dot_bins"] = list({s.joint_delta_dot_bins.lo, s.joint_delta_dot_bins.hi, s.joint_delta_dot_bins.width});
+  YAML::Node t;
+  for (double x : s.joint_times) t.push_back(x);
+  t.SetStyle(YAML::EmitterStyle::Flow);
+  a["joint_times"] = t;
+  YAML::Node root;
+  root["analysis"] = a;
+  return root;
+}
+
+BatchAnalysis analyse(const std::vector<RunRecord>& runs, const AnalysisSettings& settings) {
+  BatchAnalysis out;
+  out.settings = settings;
+  std::map<double, std::vector<const RunRecord*>> by_mu;
+  for (const RunRecord& r : runs) by_mu[r.mu].push_back(&r);
+
+  std::vector<std::vector<double>> groups;
+  std::map<std::uint32_t, std::vector<double>> by_realization;  // d at each mu, in mu order
+  for (const auto& [mu, group] : by_mu) {
+    out.mu.push_back(analyse_mu(mu, group, settings));
+    groups.emplace_back();
+    for (const RunRecord* r : group) {
+      if (r->kind != RunKind::Stochastic) continue;
+      groups.back().push_back(r->center_distance);
+      auto& row = by_realization[r->index];
+      if (row.size() + 1 == groups.size()) row.push_back(r->center_distance);  // one per mu, in order
+    }
+  }
+  out.kruskal_wallis = kruskal_wallis(groups);
+  std::vector<std::vector<double>> blocks;  // realizations present at every mu with stochastic runs
+  const auto with_runs = static_cast<std::size_t>(std::count_if(groups.begin(), groups.end(), [](const auto& g) { return !g.empty(); }));
+  if (with_runs == groups.size())
+    for (const auto& [r, row] : by_realization)
+      if (row.size() == groups.size()) blocks.push_back(row);
+  out.friedman = friedman(blocks);
+  return out;
+}
+
+}  // namespace gear_dynamics

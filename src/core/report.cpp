@@ -1,0 +1,358 @@
+#include "gear_dynamics/report.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace gear_dynamics {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr double U = kToPaperUnits;
+
+std::string num(double x, int decimals) {
+  if (std::isnan(x)) return "–";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, x);
+  return buf;
+}
+
+// A CSV field that may hold commas or quotes (RFC 4180).
+std::string quoted(const std::string& text) {
+  std::string q = "\"";
+  for (char ch : text) q += ch == '"' ? std::string("\"\"") : std::string(1, ch);
+  return q + "\"";
+}
+
+std::string csv_num(double x) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.10g", x);
+  return buf;
+}
+
+// A percentage with its interval: "93.0 [85.0, 96.5]".
+std::string percent(const Proportion& p) {
+  if (p.trials == 0) return "–";
+  return num(100 * p.estimate, 1) + " [" + num(100 * p.low, 1) + ", " + num(100 * p.high, 1) + "]";
+}
+
+const PaperReference* paper_at(double mu) {
+  for (const PaperReference& p : paper_reference())
+    if (std::abs(p.mu - mu) < 1e-9) return &p;
+  return nullptr;
+}
+
+// The paper's Table 4 only applies to its own intervals.
+bool paper_intervals(const AnalysisSettings& s) {
+  const auto same = [](double a, double b) { return std::abs(a - b) <= 1e-12; };
+  return same(s.delta_interval.lo, 4.0e-5) && same(s.delta_interval.hi, 5.5e-5) &&
+         same(s.delta_dot_interval.lo, -0.016) && same(s.delta_dot_interval.hi, 0.016);
+}
+
+std::string inside(double paper, const Proportion& p) {
+  if (std::isnan(paper) || p.trials == 0) return "";
+  return paper >= p.low && paper <= p.high ? "yes" : "no";
+}
+
+class Csv {
+ public:
+  Csv(const fs::path& path, std::vector<std::string>& written, const std::string& header) : path_(path), out_(path) {
+    if (!out_) throw std::runtime_error("cannot write " + path.string());
+    written.push_back(path.string());
+    out_ << header << '\n';
+  }
+  ~Csv() noexcept(false) {
+    out_.close();
+    if (!out_ && std::uncaught_exceptions() == 0) throw std::runtime_error("error writing " + path_.string());
+  }
+  template <class... T>
+  void row(const T&... fields) {
+    std::size_t i = 0;
+    ((out_ << (i++ ? "," : "") << field(fields)), ...);
+    out_ << '\n';
+  }
+
+ private:
+  static std::string field(double x) { return csv_num(x); }
+  static std::string field(const std::string& s) { return s; }
+  static std::string field(const char* s) { return s; }
+  template <class I, class = std::enable_if_t<std::is_integral_v<I>>>
+  static std::string field(I x) { return std::to_string(x); }
+  fs::path path_;
+  std::ofstream out_;
+};
+
+const char* kBoxHeader = "n,min,q1,median,q3,max,median_low,median_high,median_coverage";
+
+void box_row(Csv& csv, double mu, const char* group, const char* quantity, const char* unit, const BoxStats& b,
+             double scale) {
+  csv.row(mu, group, quantity, unit, b.n, b.min * scale, b.q1 * scale, b.median * scale, b.q3 * scale,
+          b.max * scale, b.median_low * scale, b.median_high * scale, b.median_coverage);
+}
+
+void probability_row(Csv& csv, double mu, const char* quantity, const std::string& reference, const Proportion& p,
+                     double paper) {
+  csv.row(mu, quantity, reference, p.successes, p.trials, p.estimate, p.low, p.high, paper, inside(paper, p));
+}
+
+std::string interval_text(const Interval& i, int decimals) {
+  return "[" + num(i.lo * U, decimals) + ", " + num(i.hi * U, decimals) + "]";
+}
+
+std::string median_with_interval(const BoxStats& b, int decimals) {
+  if (b.n == 0) return "–";
+  return num(b.median * U, decimals) + " [" + num(b.median_low * U, decimals) + ", " + num(b.median_high * U, decimals) + "]";
+}
+
+double optional_value(const std::optional<double>& v) { return v ? *v : std::nan(""); }
+
+}  // namespace
+
+const std::vector<PaperReference>& paper_reference() {
+  static const std::vector<PaperReference> table = {
+      {0.00, 0.0515, -2.167, 91, 80}, {0.01, 0.0431, -10.59, 89, 79}, {0.02, 0.0511, 7.079, 85, 90},
+      {0.03, 0.0515, 6.854, 76, 90},  {0.04, 0.0508, -9.459, 87, 89}, {0.05, 0.0453, -28.38, 85, 87}};
+  return table;
+}
+
+std::vector<std::string> write_report(const std::string& folder, const BatchInputs& in, const BatchAnalysis& a) {
+  const fs::path dir(folder);
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw std::runtime_error("cannot create report folder " + folder + ": " + ec.message());
+  std::vector<std::string> written;
+  const AnalysisSettings& s = a.settings;
+  const bool paper_table4 = paper_intervals(s);
+
+  {
+    Csv c(dir / "runs.csv", written,
+          "name,kind,mu,index,d[mm*s^-1/2],t_ss[s],t_ss_fine[s],reached_steady_state,delta_T[mm],"
+          "delta_dot_T[mm/s],phi_T[mm/s^2]");
+    for (const RunRecord& r : in.runs)
+      c.row(r.name, to_string(r.kind), r.mu, r.index, r.center_distance * U, r.steady_state_time,
+            r.steady_state_time_fine, r.reached_steady_state ? 1 : 0, r.final_delta * U, r.final_delta_dot * U,
+            r.final_phi * U);
+  }
+  {
+    Csv c(dir / "box_stats.csv", written, std::string("mu,group,quantity,unit,") + kBoxHeader);
+    for (const MuAnalysis& m : a.mu) {
+      box_row(c, m.mu, "stochastic", "d", "mm*s^-1/2", m.center_distance, U);
+      box_row(c, m.mu, "stochastic", "t_ss", "s", m.steady_state_time, 1);
+      box_row(c, m.mu, "stochastic", "t_ss_fine", "s", m.steady_state_time_fine, 1);
+      box_row(c, m.mu, "stochastic", "delta_T", "mm", m.final_delta, U);
+      box_row(c, m.mu, "stochastic", "delta_dot_T", "mm/s", m.final_delta_dot, U);
+      box_row(c, m.mu, "phase", "d", "mm*s^-1/2", m.phase_center_distance, U);
+      box_row(c, m.mu, "phase", "t_ss", "s", m.phase_steady_state_time, 1);
+      box_row(c, m.mu, "phase", "delta_T", "mm", m.phase_final_delta, U);
+      box_row(c, m.mu, "phase", "delta_dot_T", "mm/s", m.phase_final_delta_dot, U);
+    }
+  }
+  {
+    Csv c(dir / "probabilities.csv", written,
+          "mu,quantity,reference,successes,trials,estimate,wilson_low,wilson_high,paper,paper_in_interval");
+    for (const MuAnalysis& m : a.mu) {
+      const PaperReference* p = paper_at(m.mu);
+      const double nan = std::nan("");
+      const double p93 = std::abs(m.mu - kPaperMuExceeds) < 1e-9 ? kPaperExceedsS1 : nan;
+      probability_row(c, m.mu, "d>d_S1", m.s1 ? csv_num(m.s1->center_distance * U) + " mm*s^-1/2" : "no S1",
+                      m.d_exceeds_s1, p93);
+      probability_row(c, m.mu, "d>median_phase_d", csv_num(m.phase_center_distance.median * U) + " mm*s^-1/2",
+                      m.d_exceeds_phase_median, nan);
+      probability_row(c, m.mu, "delta_T_in", interval_text(s.delta_interval, 4) + " mm", m.delta_in_interval,
+                      p && paper_table4 ? p->p_delta / 100 : nan);
+      probability_row(c, m.mu, "delta_dot_T_in", interval_text(s.delta_dot_interval, 1) + " mm/s",
+                      m.delta_dot_in_interval, p && paper_table4 ? p->p_delta_dot / 100 : nan);
+      probability_row(c, m.mu, "t_ss<T", "T = " + csv_num(in.config.run.duration) + " s", m.reached_steady_state, nan);
+    }
+  }
+  {
+    Csv c(dir / "table3.csv", written,
+          "mu,s1_delta_T[mm],paper_delta_T[mm],s1_delta_dot_T[mm/s],paper_delta_dot_T[mm/s],s1_d[mm*s^-1/2],"
+          "s2_d[mm*s^-1/2],s3_d[mm*s^-1/2],s1_t_ss[s]");
+    for (const MuAnalysis& m : a.mu) {
+      const PaperReference* p = paper_at(m.mu);
+      const double nan = std::nan("");
+      c.row(m.mu, m.s1 ? m.s1->final_delta * U : nan, p ? p->delta_T : nan, m.s1 ? m.s1->final_delta_dot * U : nan,
+            p ? p->delta_dot_T : nan, m.s1 ? m.s1->center_distance * U : nan, optional_value(m.s2_center_distance) * U,
+            optional_value(m.s3_center_distance) * U, m.s1 ? m.s1->steady_state_time : nan);
+    }
+  }
+  {
+    Csv cd(dir / "pdf_delta.csv", written, "mu,lo[mm],hi[mm],count,density[1/mm]");
+    Csv cv(dir / "pdf_delta_dot.csv", written, "mu,lo[mm/s],hi[mm/s],count,density[s/mm]");
+    Csv cj(dir / "joint_pdf.csv", written,
+           "mu,t[s],delta_lo[mm],delta_hi[mm],delta_dot_lo[mm/s],delta_dot_hi[mm/s],count,density[s/mm^2]");
+    Csv co(dir / "pdf_outside.csv", written, "mu,quantity,t[s],outside,total,fraction");
+    for (const MuAnalysis& m : a.mu) {
+      for (std::size_t i = 0; i < m.delta_pdf.counts.size(); ++i)
+        cd.row(m.mu, m.delta_pdf.edges[i] * U, m.delta_pdf.edges[i + 1] * U, m.delta_pdf.counts[i],
+               m.delta_pdf.density(i) / U);
+      for (std::size_t i = 0; i < m.delta_dot_pdf.counts.size(); ++i)
+        cv.row(m.mu, m.delta_dot_pdf.edges[i] * U, m.delta_dot_pdf.edges[i + 1] * U, m.delta_dot_pdf.counts[i],
+               m.delta_dot_pdf.density(i) / U);
+      const double T = in.config.run.duration;
+      co.row(m.mu, "delta_T", T, m.delta_pdf.outside, m.delta_pdf.total, m.delta_pdf.fraction_outside());
+      co.row(m.mu, "delta_dot_T", T, m.delta_dot_pdf.outside, m.delta_dot_pdf.total, m.delta_dot_pdf.fraction_outside());
+      for (std::size_t k = 0; k < m.joint_pdf.size(); ++k) {
+        const Histogram2D& h = m.joint_pdf[k];
+        const std::size_t ny = h.y_edges.size() - 1;
+        for (std::size_t i = 0; i + 1 < h.x_edges.size(); ++i)
+          for (std::size_t j = 0; j < ny; ++j)
+            cj.row(m.mu, s.joint_times[k], h.x_edges[i] * U, h.x_edges[i + 1] * U, h.y_edges[j] * U,
+                   h.y_edges[j + 1] * U, h.counts[i * ny + j], h.density(i, j) / (U * U));
+        co.row(m.mu, "joint", s.joint_times[k], h.outside, h.total, h.fraction_outside());
+      }
+    }
+  }
+  {
+    Csv c(dir / "rank_tests.csv", written, "test,statistic,df,n,p_value,valid");
+    c.row("kruskal_wallis", a.kruskal_wallis.statistic, a.kruskal_wallis.df, a.kruskal_wallis.n,
+          a.kruskal_wallis.p_value, a.kruskal_wallis.valid ? 1 : 0);
+    c.row("friedman", a.friedman.statistic, a.friedman.df, a.friedman.n, a.friedman.p_value, a.friedman.valid ? 1 : 0);
+  }
+  {
+    Csv c(dir / "inputs.csv", written, "item,status,reason");
+    for (const SkippedFile& f : in.skipped) c.row(quoted(f.file), "skipped", quoted(f.reason));
+    for (const std::string& m : in.missing) c.row(quoted(m), "missing", "");
+  }
+
+  // ---- report.md ----
+  const fs::path md = dir / "report.md";
+  std::ofstream r(md);
+  if (!r) throw std::runtime_error("cannot write " + md.string());
+  written.push_back(md.string());
+  const std::string pct = std::to_string(static_cast<int>(std::lround(100 * s.confidence))) + " %";
+  r << "# gear_dynamics batch report\n\n";
+  r << "Batch folder(s): ";
+  for (std::size_t i = 0; i < in.folders.size(); ++i) r << (i ? ", " : "") << "`" << in.folders[i] << "`";
+  r << "\n\nT = " << in.config.run.duration << " s, h = " << in.config.run.time_step * 1e6 << " µs, window ["
+    << in.config.run.duration - in.config.run.window << ", " << in.config.run.duration << "] s, seed "
+    << in.config.seed << ". Runs used: " << in.runs.size() << " of " << in.expected_runs << " listed; bags skipped: "
+    << in.skipped.size() << "; runs missing: " << in.missing.size()
+    << (in.skipped.empty() && in.missing.empty() ? "." : " (see the end of this report and inputs.csv).") << "\n\n";
+  r << "Units as in the paper: δ in mm, δ̇ in mm/s, d in mm·s^-1/2. Intervals are " << pct
+    << ": Wilson score intervals for probabilities, exact distribution-free order-statistic intervals for "
+       "medians. Every number is also in the CSV files beside this report; the figures are drawn from them.\n\n";
+
+  r << "## Center distance d over the window (Figs. 8, 9)\n\n"
+       "Stochastic realizations: box-plot statistics (whiskers min–max as in Fig. 9) and the median with its "
+    << pct << " interval. S1 is the deterministic run, S2 and S3 are realizations 0 and 1. The phase ensemble is "
+       "S1 repeated over 64 initial mesh phases (MODEL.md §6). The paper gives d only at μ = 0.04: "
+       "S1 0.34, S2 0.44, S3 0.59.\n\n";
+  r << "| μ | R | min [mm·s^-1/2] | Q1 [mm·s^-1/2] | median [" << pct << "] [mm·s^-1/2] | Q3 [mm·s^-1/2] | max [mm·s^-1/2] "
+       "| d S1 [mm·s^-1/2] | d S2 | d S3 | phase ensemble median [" << pct << "] (n) [mm·s^-1/2] |\n"
+       "|---|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const MuAnalysis& m : a.mu) {
+    const BoxStats& b = m.center_distance;
+    r << "| " << num(m.mu, 2) << " | " << b.n << " | " << num(b.min * U, 3) << " | " << num(b.q1 * U, 3) << " | "
+      << median_with_interval(b, 3) << " | " << num(b.q3 * U, 3) << " | " << num(b.max * U, 3) << " | "
+      << (m.s1 ? num(m.s1->center_distance * U, 3) : "–") << " | " << num(optional_value(m.s2_center_distance) * U, 3)
+      << " | " << num(optional_value(m.s3_center_distance) * U, 3) << " | "
+      << median_with_interval(m.phase_center_distance, 3) << " (" << m.phase_runs << ") |\n";
+  }
+
+  r << "\n## P(d_stoch > d_det) (the paper's 93 % statement)\n\n"
+       "Strict inequality. Against S1 as in the paper, and, because one deterministic trajectory is not "
+       "reproducible pathwise after about 0.1 s (MODEL.md §6), against the median d of the phase ensemble. "
+       "The interval covers the sampling of the realizations only, not the uncertainty of the reference.\n\n";
+  r << "| μ | d > d_S1: k/R | P [" << pct << "] (%) | paper (%) | paper inside? | d > phase median: k/R | P [" << pct
+    << "] (%) |\n|---|---|---|---|---|---|---|\n";
+  for (const MuAnalysis& m : a.mu) {
+    const bool at_paper = std::abs(m.mu - kPaperMuExceeds) < 1e-9;
+    r << "| " << num(m.mu, 2) << " | " << m.d_exceeds_s1.successes << "/" << m.d_exceeds_s1.trials << " | "
+      << percent(m.d_exceeds_s1) << " | " << (at_paper ? num(100 * kPaperExceedsS1, 0) : "–") << " | "
+      << (at_paper ? inside(kPaperExceedsS1, m.d_exceeds_s1) : "") << " | " << m.d_exceeds_phase_median.successes << "/"
+      << m.d_exceeds_phase_median.trials << " | " << percent(m.d_exceeds_phase_median) << " |\n";
+  }
+
+  r << "\n## Does d depend on μ?\n\n"
+       "Kruskal–Wallis treats the μ groups as independent samples. The batch uses common random numbers "
+       "(realization r has the same load path at every μ), so Friedman's test blocked by realization is the "
+       "one that matches the design; both are reported. A large p-value means the data do not show a "
+       "difference of d across μ.\n\n"
+       "| test | statistic | df | n | p-value |\n|---|---|---|---|---|\n";
+  for (const auto& [name, t] : {std::pair<const char*, const RankTest&>{"Kruskal–Wallis H", a.kruskal_wallis},
+                                {"Friedman χ² (blocks = realizations)", a.friedman}}) {
+    r << "| " << name << " | " << (t.valid ? num(t.statistic, 3) : "–") << " | " << t.df << " | " << t.n << " | ";
+    if (!t.valid) r << "not defined (too few groups or blocks, or all tied)";
+    else if (t.p_value < 1e-4) r << "< 1e-4";
+    else r << num(t.p_value, 4);
+    r << " |\n";
+  }
+
+  r << "\n## Table 3 analogue: responses at T under the deterministic load\n\n"
+       "S1's δ(T) and δ̇(T) beside the paper's. A single deterministic trajectory is not reproducible "
+       "pathwise (MODEL.md §6), so the phase ensemble's median and range show what the model supports.\n\n"
+       "| μ | S1 δ(T) [mm] | paper δ [mm] | phase δ(T) median [min, max] [mm] | S1 δ̇(T) [mm/s] | paper δ̇ [mm/s] | "
+       "phase δ̇(T) median [min, max] [mm/s] |\n|---|---|---|---|---|---|---|\n";
+  for (const MuAnalysis& m : a.mu) {
+    const PaperReference* p = paper_at(m.mu);
+    const BoxStats &pd = m.phase_final_delta, &pv = m.phase_final_delta_dot;
+    r << "| " << num(m.mu, 2) << " | " << (m.s1 ? num(m.s1->final_delta * U, 4) : "–") << " | "
+      << (p ? num(p->delta_T, 4) : "–") << " | " << num(pd.median * U, 4) << " [" << num(pd.min * U, 4) << ", "
+      << num(pd.max * U, 4) << "] | " << (m.s1 ? num(m.s1->final_delta_dot * U, 3) : "–") << " | "
+      << (p ? num(p->delta_dot_T, 3) : "–") << " | " << num(pv.median * U, 3) << " [" << num(pv.min * U, 3) << ", "
+      << num(pv.max * U, 3) << "] |\n";
+  }
+
+  r << "\n## Table 4 analogue: probabilities of the safety intervals at T (%)\n\n"
+    << "δ(T) ∈ " << interval_text(s.delta_interval, 4) << " mm and δ̇(T) ∈ " << interval_text(s.delta_dot_interval, 1)
+    << " mm/s (closed)"
+    << (paper_table4 ? ", the paper's intervals.\n\n" : "; the paper used [0.04, 0.055] mm and [-16, 16] mm/s, so its values are not shown.\n\n")
+    << "| μ | P(δ ∈) [" << pct << "] (%) | paper (%) | paper inside? | P(δ̇ ∈) [" << pct
+    << "] (%) | paper (%) | paper inside? |\n|---|---|---|---|---|---|---|\n";
+  for (const MuAnalysis& m : a.mu) {
+    const PaperReference* p = paper_table4 ? paper_at(m.mu) : nullptr;
+    r << "| " << num(m.mu, 2) << " | " << percent(m.delta_in_interval) << " | " << (p ? num(p->p_delta, 0) : "–")
+      << " | " << (p ? inside(p->p_delta / 100, m.delta_in_interval) : "") << " | " << percent(m.delta_dot_in_interval)
+      << " | " << (p ? num(p->p_delta_dot, 0) : "–") << " | " << (p ? inside(p->p_delta_dot / 100, m.delta_dot_in_interval) : "")
+      << " |\n";
+  }
+
+  r << "\n## Time to steady state t_ss\n\n"
+       "The last time |δ − b| exceeds " << in.config.run.steady_state_tolerance << "·b (MODEL.md §8). The paper "
+       "reports about 0.35 s for S1 and that S2 and S3 had not settled by 0.4 s.\n\n"
+       "| μ | S1 t_ss [s] | phase median [min, max] [s] | stochastic median [" << pct << "] [s] | stochastic Q1–Q3 [s] "
+       "| P(t_ss < T) [" << pct << "] (%) |\n|---|---|---|---|---|---|\n";
+  for (const MuAnalysis& m : a.mu) {
+    const BoxStats &ps = m.phase_steady_state_time, &st = m.steady_state_time;
+    r << "| " << num(m.mu, 2) << " | " << (m.s1 ? num(m.s1->steady_state_time, 4) : "–") << " | " << num(ps.median, 4)
+      << " [" << num(ps.min, 4) << ", " << num(ps.max, 4) << "] | "
+      << (st.n ? num(st.median, 4) + " [" + num(st.median_low, 4) + ", " + num(st.median_high, 4) + "]" : "–")
+      << " | " << num(st.q1, 4) << "–" << num(st.q3, 4) << " | " << percent(m.reached_steady_state) << " |\n";
+  }
+
+  r << "\n## PDFs at T and their joint evolution (Figs. 10–12)\n\n"
+       "Density-normalised histograms, count/(R·width), with MODEL.md's edges; the fraction of the "
+       "realizations outside the edges is not in any bin:\n\n| μ | δ(T) outside (%) | δ̇(T) outside (%) |\n|---|---|---|\n";
+  for (const MuAnalysis& m : a.mu)
+    r << "| " << num(m.mu, 2) << " | " << num(100 * m.delta_pdf.fraction_outside(), 1) << " | "
+      << num(100 * m.delta_dot_pdf.fraction_outside(), 1) << " |\n";
+
+  r << "\n## Figures\n\n"
+       "| paper | figure |\n|---|---|\n"
+       "| Fig. 5 load processes S1, S2, S3 | ![](fig05_load.png) |\n"
+       "| Fig. 6 δ(t) of S1, S2, S3 | ![](fig06_delta.png) |\n"
+       "| Fig. 7 phase portraits on the window | ![](fig07_phase.png) |\n"
+       "| Fig. 8 d of S1, S2, S3 vs μ | ![](fig08_center_distance.png) |\n"
+       "| Fig. 9 box plots of d vs μ | ![](fig09_boxplot.png) |\n"
+       "| Fig. 10 joint PDF evolution | ![](fig10_joint_pdf.png) |\n"
+       "| Fig. 11 PDF of δ(T) | ![](fig11_pdf_delta.png) |\n"
+       "| Fig. 12 PDF of δ̇(T) | ![](fig12_pdf_delta_dot.png) |\n";
+
+  if (!in.skipped.empty() || !in.missing.empty()) {
+    r << "\n## Left out\n\n| item | status | reason |\n|---|---|---|\n";
+    for (const SkippedFile& f : in.skipped) r << "| `" << f.file << "` | skipped | " << f.reason << " |\n";
+    for (const std::string& m : in.missing) r << "| " << m << " | missing | |\n";
+  }
+  r.close();
+  if (!r) throw std::runtime_error("error writing " + md.string());
+  return written;
+}
+
+}  // namespace gear_dynamics
