@@ -46,7 +46,8 @@ class DivergenceError : public std::runtime_error {
 class Ensemble {
  public:
   static constexpr int kPacket = 8;          // lanes per SIMD packet; blocks are padded to it
-  static constexpr int kNormalChunk = 256;   // steps of normals drawn per refill
+  // Steps of normals drawn per refill: one generator block, and lanes x chunk stays in L1.
+  static constexpr int kNormalChunk = 2 * NormalStream::kBlockPairs;
 
   Ensemble(const GearPair& gear, double time_step, const InitialState& initial,
            std::vector<LaneSpec> lanes, std::uint64_t seed);
@@ -76,8 +77,8 @@ class Ensemble {
   void set_drift(int lane, double drift);
 
  private:
-  void refill_normals();
-  void check_finite() const;
+  void refill_normals(std::uint64_t first_index);
+  void report_divergence() const;
 
   GearPair gear_;
   MeshSchedule mesh_;
@@ -90,8 +91,10 @@ class Ensemble {
 
   // Padded to a multiple of kPacket.
   Eigen::ArrayXd delta_, velocity_, load_, mu_, sigma_, drift_;
-  Eigen::ArrayXXd normals_;  // padded lanes x kNormalChunk; column j is step normals_start_ + j
-  std::int64_t normals_start_ = 0;
+  // Padded lanes x kNormalChunk: column j holds normal normals_first_ + j of each lane's stream.
+  // Chunks start at multiples of kNormalChunk, whole blocks of the stream's generator.
+  Eigen::ArrayXXd normals_;
+  std::uint64_t normals_first_ = 0;
 };
 
 }  // namespace gear_dynamics

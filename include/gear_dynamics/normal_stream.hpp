@@ -1,5 +1,6 @@
-// One counter-based stream of standard normals per realization (MODEL.md §4): Random123's
-// Philox4x32-10 keyed by (seed, realization), turned into normals by Random123's Box-Muller.
+// One counter-based stream of standard normals per realization (MODEL.md §4): Philox4x32-10
+// (bit for bit Random123's) keyed by (seed, realization), turned into normals by Box-Muller,
+// generated kBlockPairs counters at a time in SIMD.
 // Normal i of a stream depends only on (seed, realization, i), so a realization has the same path
 // whatever runs beside it, in whatever order, on however many threads.
 #pragma once
@@ -11,6 +12,8 @@ namespace gear_dynamics {
 
 class NormalStream {
  public:
+  static constexpr int kBlockPairs = 32;  // pairs of normals generated together
+
   NormalStream(std::uint64_t seed, std::uint64_t realization);
 
   // Normal number `index` of the stream.
@@ -18,8 +21,13 @@ class NormalStream {
   // out[k] = at(first + k) for k < count.
   void fill(std::uint64_t first, double* out, std::size_t count) const;
 
+  // Philox4x32-10 output of the counters (p, p >> 32, seed_high, 0) for p = first_pair ...
+  // first_pair + kBlockPairs - 1, as the words w0 = out[1]:out[0] and w1 = out[3]:out[2].
+  void philox(std::uint64_t first_pair, std::uint64_t* w0, std::uint64_t* w1) const;
+
  private:
-  void pair(std::uint64_t pair_index, double& z0, double& z1) const;
+  // Normals 2 first_pair ... 2 (first_pair + kBlockPairs) - 1 into out.
+  void block(std::uint64_t first_pair, double* out) const;
   std::uint32_t key_[2];
   std::uint32_t seed_high_;
 };

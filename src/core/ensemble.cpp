@@ -45,17 +45,17 @@ Ensemble::Ensemble(const GearPair& gear, double time_step, const InitialState& i
 
 void Ensemble::reset() {
   n_ = 0;
+  refill_normals(0);
   for (int i = 0; i < lanes(); ++i) {
     const LaneSpec& s = spec_[i];
     delta_[i] = initial_.deflection;
     velocity_[i] = initial_.velocity;
-    // Normal 0 of the stream gives Phi(0); normals 1, 2, ... drive steps 0, 1, ...
-    load_[i] = s.load_mean + s.load_sd * (s.stochastic ? streams_[i].at(0) : 0.0);
+    // Normal 0 of a stream gives Phi(0); normal n + 1 drives step n.
+    load_[i] = s.load_mean + s.load_sd * normals_(i, 0);
     mu_[i] = s.mu;
     sigma_[i] = s.sigma;
     drift_[i] = s.drift;
   }
-  refill_normals();
 }
 
 void Ensemble::set_mu(int lane, double mu) { spec_.at(lane).mu = mu_[lane] = mu; }
@@ -68,22 +68,24 @@ void Ensemble::set_sigma(int lane, double sigma) {
 
 void Ensemble::set_drift(int lane, double drift) { spec_.at(lane).drift = drift_[lane] = drift; }
 
-void Ensemble::refill_normals() {
-  normals_start_ = n_;
-  std::vector<double> row(kNormalChunk);
+void Ensemble::refill_normals(std::uint64_t first_index) {
+  normals_first_ = first_index;
+  double row[kNormalChunk];
   for (int i = 0; i < lanes(); ++i) {
     if (!spec_[i].stochastic) continue;  // stays zero
-    streams_[i].fill(1 + static_cast<std::uint64_t>(n_), row.data(), row.size());
-    for (int j = 0; j < kNormalChunk; ++j) normals_(i, j) = row[j];
+    streams_[i].fill(first_index, row, kNormalChunk);
+    normals_.row(i) = Eigen::Map<const Eigen::Array<double, 1, kNormalChunk>>(row);
   }
 }
 
 void Ensemble::step() {
-  if (n_ - normals_start_ >= kNormalChunk) refill_normals();
+  const auto index = static_cast<std::uint64_t>(n_) + 1;  // normal of this step
+  if (index >= normals_first_ + kNormalChunk) refill_normals(normals_first_ + kNormalChunk);
   const StepPlan plan = mesh_.plan(n_);
   const double b = gear_.in.backlash, alpha = gear_.damping_coefficient, q3 = gear_.q3;
   const double sqrt_h = std::sqrt(h_);
-  const double* z_col = &normals_(0, n_ - normals_start_);
+  const double* z_col = &normals_(0, static_cast<Eigen::Index>(index - normals_first_));
+  Packet sum = Packet::Zero();  // NaN and inf propagate through it: one finiteness test per step
 
   for (Eigen::Index p = 0; p < delta_.size(); p += kPacket) {
     Packet d = delta_.segment<kPacket>(p);
@@ -118,14 +120,13 @@ void Ensemble::step() {
     delta_.segment<kPacket>(p) = d;
     velocity_.segment<kPacket>(p) = v;
     load_.segment<kPacket>(p) = load1;
+    sum += d + v;
   }
   ++n_;
-  check_finite();
+  if (!std::isfinite(sum.sum())) report_divergence();
 }
 
-void Ensemble::check_finite() const {
-  // One reduction per step: NaN and inf propagate through the sum.
-  if (std::isfinite((delta_ + velocity_).sum())) return;
+void Ensemble::report_divergence() const {
   for (int i = 0; i < lanes(); ++i) {
     if (std::isfinite(delta_[i]) && std::isfinite(velocity_[i])) continue;
     std::ostringstream msg;

@@ -1,9 +1,22 @@
 #include "gear_dynamics/normal_stream.hpp"
 
-#include <Random123/boxmuller.hpp>
-#include <Random123/philox.h>
+#include <Eigen/Core>
+#include <immintrin.h>
+#include <algorithm>
+#include <cmath>
 
 namespace gear_dynamics {
+
+namespace {
+
+constexpr int kBlockPairs = NormalStream::kBlockPairs;
+constexpr double kQuarterPi = 0.78539816339744830962;
+
+// Philox4x32-10 (Salmon et al. 2011) constants, as in Random123's philox.h.
+constexpr std::uint32_t kPhiloxM0 = 0xD2511F53u, kPhiloxM1 = 0xCD9E8D57u;
+constexpr std::uint32_t kPhiloxW0 = 0x9E3779B9u, kPhiloxW1 = 0xBB67AE85u;
+
+}  // namespace
 
 NormalStream::NormalStream(std::uint64_t seed, std::uint64_t realization)
     : key_{static_cast<std::uint32_t>(realization), static_cast<std::uint32_t>(seed)},
@@ -13,31 +26,122 @@ NormalStream::NormalStream(std::uint64_t seed, std::uint64_t realization)
   seed_high_ ^= static_cast<std::uint32_t>(realization >> 32) * 0x9E3779B9u;
 }
 
-void NormalStream::pair(std::uint64_t pair_index, double& z0, double& z1) const {
-  r123::Philox4x32 rng;
-  const r123::Philox4x32::ctr_type ctr = {{static_cast<std::uint32_t>(pair_index),
-                                           static_cast<std::uint32_t>(pair_index >> 32), seed_high_,
-                                           0u}};
-  const r123::Philox4x32::key_type key = {{key_[0], key_[1]}};
-  const r123::Philox4x32::ctr_type bits = rng(ctr, key);
-  const std::uint64_t u0 = (static_cast<std::uint64_t>(bits[1]) << 32) | bits[0];
-  const std::uint64_t u1 = (static_cast<std::uint64_t>(bits[3]) << 32) | bits[2];
-  const r123::double2 z = r123::boxmuller(u0, u1);
-  z0 = z.x;
-  z1 = z.y;
+void NormalStream::philox(std::uint64_t first_pair, std::uint64_t* w0, std::uint64_t* w1) const {
+  // Philox4x32-10 on the counters (p, p >> 32, seed_high, 0) for kBlockPairs consecutive p, run
+  // side by side. Random123's implementation works one counter at a time and compilers turn its
+  // 32 x 32 -> 64 bit products into slow 64-bit vector multiplies, hence the AVX-512 path;
+  // both paths are integer arithmetic, so they agree bit for bit (test_random checks both
+  // against r123::Philox4x32).
+  constexpr std::uint64_t kLow = 0xFFFFFFFFull;
+  int i = 0;
+#ifdef __AVX512F__
+  // kGroups vectors of 8 counters advance together: the rounds are a latency chain, and
+  // independent chains side by side keep the multipliers busy.
+  constexpr int kGroups = 4;
+  const __m512i low = _mm512_set1_epi64(static_cast<long long>(kLow));
+  const __m512i m0 = _mm512_set1_epi64(kPhiloxM0), m1 = _mm512_set1_epi64(kPhiloxM1);
+  const __m512i lane = _mm512_set_epi64(7, 6, 5, 4, 3, 2, 1, 0);
+  for (; i + 8 * kGroups <= kBlockPairs; i += 8 * kGroups) {
+    __m512i c0[kGroups], c1[kGroups], c2[kGroups], c3[kGroups];
+    for (int g = 0; g < kGroups; ++g) {
+      const __m512i p = _mm512_add_epi64(_mm512_set1_epi64(static_cast<long long>(first_pair + i + 8 * g)), lane);
+      c0[g] = _mm512_and_si512(p, low);
+      c1[g] = _mm512_srli_epi64(p, 32);
+      c2[g] = _mm512_set1_epi64(seed_high_);
+      c3[g] = _mm512_setzero_si512();
+    }
+    std::uint32_t k0 = key_[0], k1 = key_[1];
+    for (int round = 0; round < 10; ++round) {
+      const __m512i key0 = _mm512_set1_epi64(k0), key1 = _mm512_set1_epi64(k1);
+      for (int g = 0; g < kGroups; ++g) {
+        const __m512i p0 = _mm512_mul_epu32(c0[g], m0);  // low 32 bits of each lane, 64-bit product
+        const __m512i p1 = _mm512_mul_epu32(c2[g], m1);
+        c0[g] = _mm512_xor_si512(_mm512_xor_si512(_mm512_srli_epi64(p1, 32), c1[g]), key0);
+        c1[g] = _mm512_and_si512(p1, low);
+        c2[g] = _mm512_xor_si512(_mm512_xor_si512(_mm512_srli_epi64(p0, 32), c3[g]), key1);
+        c3[g] = _mm512_and_si512(p0, low);
+      }
+      k0 += kPhiloxW0;
+      k1 += kPhiloxW1;
+    }
+    for (int g = 0; g < kGroups; ++g) {
+      _mm512_storeu_si512(w0 + i + 8 * g, _mm512_or_si512(_mm512_slli_epi64(c1[g], 32), c0[g]));
+      _mm512_storeu_si512(w1 + i + 8 * g, _mm512_or_si512(_mm512_slli_epi64(c3[g], 32), c2[g]));
+    }
+  }
+#endif
+  for (; i < kBlockPairs; ++i) {
+    const std::uint64_t p = first_pair + static_cast<std::uint64_t>(i);
+    std::uint64_t c0 = p & kLow, c1 = p >> 32, c2 = seed_high_, c3 = 0u;
+    std::uint32_t k0 = key_[0], k1 = key_[1];
+    for (int round = 0; round < 10; ++round) {
+      const std::uint64_t p0 = c0 * kPhiloxM0, p1 = c2 * kPhiloxM1;
+      c0 = (p1 >> 32) ^ c1 ^ k0;
+      c1 = p1 & kLow;
+      c2 = (p0 >> 32) ^ c3 ^ k1;
+      c3 = p0 & kLow;
+      k0 += kPhiloxW0;
+      k1 += kPhiloxW1;
+    }
+    w0[i] = (c1 << 32) | c0;
+    w1[i] = (c3 << 32) | c2;
+  }
+}
+
+// Box-Muller on the two 64-bit words of each counter: radius sqrt(-2 ln u) from w1, and the
+// angle from w0 as phi uniform in (-pi/4, pi/4) (52 bits) turned by one of four quarter turns
+// (2 bits: swap sin/cos, negate both), which is uniform on the circle without a range reduction.
+// sin and cos of |phi| <= pi/4 are Taylor polynomials whose truncation error (< 5e-17) is below
+// rounding. The log is Eigen's SIMD log, always on whole blocks, so a normal's value depends only
+// on its index, never on how a caller chunks its requests.
+void NormalStream::block(std::uint64_t first_pair, double* out) const {
+  alignas(64) std::uint64_t w0[kBlockPairs], w1[kBlockPairs];
+  philox(first_pair, w0, w1);
+
+  using Block = Eigen::Array<double, kBlockPairs, 1>;
+  Block uniform, phi;
+  for (int i = 0; i < kBlockPairs; ++i) {
+    uniform[i] = (static_cast<double>(w1[i] >> 11) + 0.5) * 0x1p-53;                 // (0, 1)
+    phi[i] = ((static_cast<double>(w0[i] & 0xFFFFFFFFFFFFFull) + 0.5) * 0x1p-52 - 0.5) * 2.0 * kQuarterPi;
+  }
+  const Block log_u = uniform.log();  // a statement of its own: Eigen's SIMD path needs it alone
+  for (int i = 0; i < kBlockPairs; ++i) {
+    const double t = phi[i], t2 = t * t;
+    const double s = t * (1.0 + t2 * (-1.0 / 6 + t2 * (1.0 / 120 + t2 * (-1.0 / 5040 + t2 * (1.0 / 362880 +
+                     t2 * (-1.0 / 39916800 + t2 * (1.0 / 6227020800 + t2 * (-1.0 / 1307674368000))))))));
+    const double c = 1.0 + t2 * (-0.5 + t2 * (1.0 / 24 + t2 * (-1.0 / 720 + t2 * (1.0 / 40320 +
+                     t2 * (-1.0 / 3628800 + t2 * (1.0 / 479001600 + t2 * (-1.0 / 87178291200 +
+                     t2 * (1.0 / 20922789888000))))))));
+    const bool swap = (w0[i] >> 63) != 0;
+    const double radius = std::sqrt(-2.0 * log_u[i]) * ((w0[i] >> 62 & 1u) ? -1.0 : 1.0);
+    out[2 * i] = (swap ? c : s) * radius;
+    out[2 * i + 1] = (swap ? s : c) * radius;
+  }
 }
 
 double NormalStream::at(std::uint64_t index) const {
-  double z0, z1;
-  pair(index / 2, z0, z1);
-  return (index % 2 == 0) ? z0 : z1;
+  double out[2 * kBlockPairs];
+  const std::uint64_t pair = index / 2;
+  block(pair - pair % kBlockPairs, out);
+  return out[2 * (pair % kBlockPairs) + index % 2];
 }
 
 void NormalStream::fill(std::uint64_t first, double* out, std::size_t count) const {
-  std::size_t k = 0;
-  if (count > 0 && first % 2 == 1) out[k++] = at(first);
-  for (; k + 1 < count; k += 2) pair((first + k) / 2, out[k], out[k + 1]);
-  if (k < count) out[k] = at(first + k);
+  double buf[2 * kBlockPairs];
+  constexpr std::uint64_t kBlockNormals = 2 * kBlockPairs;
+  std::uint64_t index = first;
+  const std::uint64_t end = first + count;
+  while (index < end) {
+    const std::uint64_t start = index - index % kBlockNormals;
+    const std::uint64_t stop = std::min(end, start + kBlockNormals);
+    if (start == index && stop == start + kBlockNormals) {
+      block(start / 2, out + (index - first));  // whole block: straight into place
+    } else {
+      block(start / 2, buf);
+      std::copy(buf + (index - start), buf + (stop - start), out + (index - first));
+    }
+    index = stop;
+  }
 }
 
 }  // namespace gear_dynamics

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstring>
 
+#include <Random123/philox.h>
+
 #include "gear_dynamics/ensemble.hpp"
 #include "gear_dynamics/normal_stream.hpp"
 
@@ -26,10 +28,36 @@ gd::LaneSpec stochastic(std::uint64_t r, double mu) {
 
 }  // namespace
 
+// The SIMD Philox is Random123's Philox4x32-10, bit for bit, on the counters and keys of MODEL.md's
+// (seed, realization) scheme, including high seed and realization bits.
+TEST(NormalStream, PhiloxMatchesRandom123) {
+  for (const std::uint64_t seed : {20180529ull, 0x123456789ABCDEFull}) {
+    for (const std::uint64_t r : {0ull, 99ull, (1ull << 33) + 5}) {
+      const gd::NormalStream s(seed, r);
+      for (const std::uint64_t first : {0ull, 64ull, (1ull << 32) - 16}) {
+        std::uint64_t w0[gd::NormalStream::kBlockPairs], w1[gd::NormalStream::kBlockPairs];
+        s.philox(first, w0, w1);
+        const std::uint32_t seed_high =
+            static_cast<std::uint32_t>(seed >> 32) ^ static_cast<std::uint32_t>(r >> 32) * 0x9E3779B9u;
+        for (int i = 0; i < gd::NormalStream::kBlockPairs; ++i) {
+          const std::uint64_t p = first + i;
+          const r123::Philox4x32::ctr_type ctr = {
+              {static_cast<std::uint32_t>(p), static_cast<std::uint32_t>(p >> 32), seed_high, 0u}};
+          const r123::Philox4x32::key_type key = {
+              {static_cast<std::uint32_t>(r), static_cast<std::uint32_t>(seed)}};
+          const auto out = r123::Philox4x32()(ctr, key);
+          ASSERT_EQ(w0[i], (std::uint64_t{out[1]} << 32 | out[0])) << "counter " << p;
+          ASSERT_EQ(w1[i], (std::uint64_t{out[3]} << 32 | out[2])) << "counter " << p;
+        }
+      }
+    }
+  }
+}
+
 TEST(NormalStream, FillEqualsAtFromAnyOffset) {
   const gd::NormalStream s(20180529, 3);
-  for (std::uint64_t first : {0u, 1u, 2u, 7u}) {
-    std::vector<double> out(11);
+  for (std::uint64_t first : {0u, 1u, 2u, 7u, 63u, 64u, 130u}) {
+    std::vector<double> out(150);
     s.fill(first, out.data(), out.size());
     for (std::size_t k = 0; k < out.size(); ++k) EXPECT_TRUE(bit_equal(out[k], s.at(first + k)));
   }
@@ -56,6 +84,16 @@ TEST(NormalStream, MomentsAndIndependence) {
   // Standard normal: mean within 4 SE = 4/sqrt(n), variance within 4 sqrt(2/n).
   EXPECT_NEAR(mean(x), 0.0, 4.0 / std::sqrt(n));
   EXPECT_NEAR(moment(x, x), 1.0, 4.0 * std::sqrt(2.0 / n));
+  // Shape: E[z^3] = 0 (sd sqrt(15 / n)), E[z^4] = 3 (sd sqrt(96 / n)), P(|z| > 2) = 0.0455003.
+  double m3 = 0, m4 = 0, tail = 0;
+  for (double e : x) {
+    m3 += e * e * e / n;
+    m4 += e * e * e * e / n;
+    tail += (std::abs(e) > 2.0) / static_cast<double>(n);
+  }
+  EXPECT_NEAR(m3, 0.0, 4.0 * std::sqrt(15.0 / n));
+  EXPECT_NEAR(m4, 3.0, 4.0 * std::sqrt(96.0 / n));
+  EXPECT_NEAR(tail, 0.0455003, 4.0 * std::sqrt(0.0455003 * (1 - 0.0455003) / n));
   // Independent streams: the correlation of n pairs has standard error 1/sqrt(n).
   EXPECT_NEAR(moment(x, y) / std::sqrt(moment(x, x) * moment(y, y)), 0.0, 4.0 / std::sqrt(n));
   EXPECT_NEAR(moment(x, z) / std::sqrt(moment(x, x) * moment(z, z)), 0.0, 4.0 / std::sqrt(n));
