@@ -33,6 +33,7 @@ struct RunResult {
   double delta_dot_range = 0.0;         // same for delta_dot [m/s]
   double steady_state_time = 0.0;       // t_ss at steady_state_tolerance [s]
   double steady_state_time_fine = 0.0;  // t_ss at steady_state_tolerance_fine [s]
+  bool reached_steady_state = false;    // t_ss < T, decided on grid indices (not rounded times)
   double final_delta = 0.0, final_delta_dot = 0.0, final_load = 0.0;
   std::vector<SnapshotState> snapshots;
 };

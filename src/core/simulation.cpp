@@ -59,6 +59,7 @@ std::vector<RunResult> simulate(Ensemble& ensemble, const RunSettings& settings,
     r.delta_dot_range = vr[i];
     r.steady_state_time = settle.time()[i];
     r.steady_state_time_fine = settle_fine.time()[i];
+    r.reached_steady_state = settings.steps_for(r.steady_state_time) < total;
     r.final_delta = ensemble.delta()[i];
     r.final_delta_dot = ensemble.velocity()[i];
     r.final_load = ensemble.load()[i];

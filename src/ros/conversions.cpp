@@ -99,7 +99,7 @@ RunSummary make_summary(const std::string& run_name, const std::string& kind,
   m.delta_dot_range = r.delta_dot_range;
   m.steady_state_time = r.steady_state_time;
   m.steady_state_time_fine = r.steady_state_time_fine;
-  m.reached_steady_state = r.steady_state_time < run.duration;
+  m.reached_steady_state = r.reached_steady_state;
   m.final_delta = r.final_delta;
   m.final_delta_dot = r.final_delta_dot;
   m.final_phi = r.final_load;

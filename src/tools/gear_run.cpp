@@ -137,7 +137,7 @@ int main(int argc, char** argv) try {
     const auto& r = results[i];
     std::printf("%s: d = %.6f mm s^-1/2, t_ss = %.6f s (%s), delta(T) = %.6f mm, delta_dot(T) = %.4f mm/s, Phi(T) = %.3f mm/s^2\n",
                 names[i].c_str(), 1e3 * r.center_distance, r.steady_state_time,
-                r.steady_state_time < cfg.run.duration ? "steady" : "not steady", 1e3 * r.final_delta,
+                r.reached_steady_state ? "steady" : "not steady", 1e3 * r.final_delta,
                 1e3 * r.final_delta_dot, 1e3 * r.final_load);
   }
   return 0;

@@ -137,6 +137,7 @@ TEST(Simulate, ObserversAgreeWithTheFullPath) {
     EXPECT_EQ(results[i].center_distance, d);
     EXPECT_EQ(d_live[i], d);  // the live d(T) over the trailing window is the same number
     EXPECT_EQ(results[i].steady_state_time, last_out[i]);
+    EXPECT_EQ(results[i].reached_steady_state, std::llround(last_out[i] / 1e-6) < 20000);
     ASSERT_EQ(results[i].snapshots.size(), 3u);
     for (int k = 0; k < 3; ++k) EXPECT_EQ(results[i].snapshots[k].delta, snap[k][i]);
     EXPECT_DOUBLE_EQ(results[i].snapshots[1].time, 0.017);
