@@ -3,6 +3,7 @@
 #include <Eigen/Core>
 #include <immintrin.h>
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 namespace gear_dynamics {
@@ -11,6 +12,12 @@ namespace {
 
 constexpr int kBlockPairs = NormalStream::kBlockPairs;
 constexpr double kQuarterPi = 0.78539816339744830962;
+// Taylor coefficients of sin(t) / t and cos(t) in t^2, highest first; on |t| <= pi/4 the first
+// omitted terms are below 5e-17.
+constexpr std::array<double, 8> kSinTaylor = {-1.0 / 1307674368000, 1.0 / 6227020800, -1.0 / 39916800,
+                                              1.0 / 362880, -1.0 / 5040, 1.0 / 120, -1.0 / 6, 1.0};
+constexpr std::array<double, 9> kCosTaylor = {1.0 / 20922789888000, -1.0 / 87178291200, 1.0 / 479001600,
+                                              -1.0 / 3628800, 1.0 / 40320, -1.0 / 720, 1.0 / 24, -0.5, 1.0};
 
 // Philox4x32-10 (Salmon et al. 2011) constants, as in Random123's philox.h.
 constexpr std::uint32_t kPhiloxM0 = 0xD2511F53u, kPhiloxM1 = 0xCD9E8D57u;
@@ -91,8 +98,7 @@ void NormalStream::philox(std::uint64_t first_pair, std::uint64_t* w0, std::uint
 // Box-Muller on the two 64-bit words of each counter: radius sqrt(-2 ln u) from w1, and the
 // angle from w0 as phi uniform in (-pi/4, pi/4) (52 bits) turned by one of four quarter turns
 // (2 bits: swap sin/cos, negate both), which is uniform on the circle without a range reduction.
-// sin and cos of |phi| <= pi/4 are Taylor polynomials whose truncation error (< 5e-17) is below
-// rounding. The log is Eigen's SIMD log, always on whole blocks, so a normal's value depends only
+// sin and cos of |phi| <= pi/4 are Taylor polynomials. The log is Eigen's SIMD log, always on whole blocks, so a normal's value depends only
 // on its index, never on how a caller chunks its requests.
 void NormalStream::block(std::uint64_t first_pair, double* out) const {
   alignas(64) std::uint64_t w0[kBlockPairs], w1[kBlockPairs];
@@ -105,17 +111,17 @@ void NormalStream::block(std::uint64_t first_pair, double* out) const {
     phi[i] = ((static_cast<double>(w0[i] & 0xFFFFFFFFFFFFFull) + 0.5) * 0x1p-52 - 0.5) * 2.0 * kQuarterPi;
   }
   const Block log_u = uniform.log();  // a statement of its own: Eigen's SIMD path needs it alone
+  // Horner steps as whole-block statements: four independent vectors per step hide the latency.
+  const Block t2 = phi * phi;
+  Block sin_poly = Block::Constant(kSinTaylor[0]), cos_poly = Block::Constant(kCosTaylor[0]);
+  for (std::size_t k = 1; k < kSinTaylor.size(); ++k) sin_poly = sin_poly * t2 + kSinTaylor[k];
+  for (std::size_t k = 1; k < kCosTaylor.size(); ++k) cos_poly = cos_poly * t2 + kCosTaylor[k];
+  const Block s = phi * sin_poly;
   for (int i = 0; i < kBlockPairs; ++i) {
-    const double t = phi[i], t2 = t * t;
-    const double s = t * (1.0 + t2 * (-1.0 / 6 + t2 * (1.0 / 120 + t2 * (-1.0 / 5040 + t2 * (1.0 / 362880 +
-                     t2 * (-1.0 / 39916800 + t2 * (1.0 / 6227020800 + t2 * (-1.0 / 1307674368000))))))));
-    const double c = 1.0 + t2 * (-0.5 + t2 * (1.0 / 24 + t2 * (-1.0 / 720 + t2 * (1.0 / 40320 +
-                     t2 * (-1.0 / 3628800 + t2 * (1.0 / 479001600 + t2 * (-1.0 / 87178291200 +
-                     t2 * (1.0 / 20922789888000))))))));
     const bool swap = (w0[i] >> 63) != 0;
     const double radius = std::sqrt(-2.0 * log_u[i]) * ((w0[i] >> 62 & 1u) ? -1.0 : 1.0);
-    out[2 * i] = (swap ? c : s) * radius;
-    out[2 * i + 1] = (swap ? s : c) * radius;
+    out[2 * i] = (swap ? cos_poly[i] : s[i]) * radius;
+    out[2 * i + 1] = (swap ? s[i] : cos_poly[i]) * radius;
   }
 }
 
