@@ -130,6 +130,18 @@ std::vector<std::string> write_report(const std::string& folder, const BatchInpu
   const bool paper_table4 = paper_intervals(s);
 
   {
+    Csv c(dir / "batch.csv", written, "key,value,unit");
+    c.row("duration", in.config.run.duration, "s");
+    c.row("time_step", in.config.run.time_step, "s");
+    c.row("window", in.config.run.window, "s");
+    c.row("seed", in.config.seed, "");
+    c.row("confidence", s.confidence, "");
+    c.row("runs_expected", in.expected_runs, "");
+    c.row("runs_used", in.runs.size(), "");
+    c.row("bags_skipped", in.skipped.size(), "");
+    c.row("missing", in.missing.size(), "");
+  }
+  {
     Csv c(dir / "runs.csv", written,
           "name,kind,mu,index,d[mm*s^-1/2],t_ss[s],t_ss_fine[s],reached_steady_state,delta_T[mm],"
           "delta_dot_T[mm/s],phi_T[mm/s^2]");

@@ -182,10 +182,10 @@ TEST(Report, WritesTablesWithPaperValuesAndEveryCsv) {
   const fs::path dir = fs::temp_directory_path() / ("gd_report_test_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   const auto files = gd::write_report(dir.string(), in, a);
-  for (const char* f : {"report.md", "runs.csv", "box_stats.csv", "probabilities.csv", "table3.csv", "pdf_delta.csv",
+  for (const char* f : {"report.md", "batch.csv", "runs.csv", "box_stats.csv", "probabilities.csv", "table3.csv", "pdf_delta.csv",
                         "pdf_delta_dot.csv", "joint_pdf.csv", "pdf_outside.csv", "rank_tests.csv", "inputs.csv"})
     EXPECT_TRUE(fs::exists(dir / f)) << f;
-  EXPECT_EQ(files.size(), 11u);
+  EXPECT_EQ(files.size(), 12u);
   std::ifstream md(dir / "report.md");
   const std::string text((std::istreambuf_iterator<char>(md)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("| 0.04 | 4/12 |"), std::string::npos) << "exceedance row at mu = 0.04";

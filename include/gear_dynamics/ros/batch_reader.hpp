@@ -1,0 +1,43 @@
+// Reads Monte Carlo batch folders (PROTOCOL.md's batch folder contract: manifest*.yaml plus one bag
+// per run) into one fixed-size record per run, streaming each bag with rosbag::View. A bag that is
+// unfinished (.active), truncated, corrupted, of another batch or not listed is skipped with a
+// warning naming the file and the reason; listed runs without a usable bag are reported missing.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "gear_dynamics/report.hpp"
+
+namespace gear_dynamics {
+
+// Topics of a run bag.
+constexpr const char* kRunInfoTopic = "/gear/run_info";
+constexpr const char* kStateTopic = "/gear/state";
+constexpr const char* kSummaryTopic = "/gear/summary";
+constexpr const char* kManifestFormat = "gear_dynamics_batch/1";
+
+// The batch cannot be read at all: no folder, no manifest, manifests of different batches, or a
+// folder without a usable bag.
+class BatchReadError : public std::runtime_error {
+ public:
+  explicit BatchReadError(const std::string& what) : std::runtime_error(what) {}
+};
+
+struct ReadOptions {
+  // Where the decimated series of S1, S2 and S3 (realizations 0 and 1) at friction series_mu go,
+  // as CSV in the paper's units (for Figs. 5-7); empty: no series are read.
+  std::string series_csv;
+  double series_mu = 0.04;
+};
+
+// Reads and merges the folders (shards of one batch, or one folder several shards wrote into).
+// Throws BatchReadError.
+BatchInputs read_batches(const std::vector<std::string>& folders, const ReadOptions& options = {});
+
+// True when the folder has a manifest and every run it lists has its finished bag (used to wait
+// for a batch). Never throws.
+bool batch_complete(const std::string& folder);
+
+}  // namespace gear_dynamics

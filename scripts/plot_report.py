@@ -1,0 +1,198 @@
+#!/usr/bin/python3
+"""Draws the figures of a gear_aggregator report (the paper's Figs. 5-12) from its CSV files.
+
+usage: plot_report.py REPORT_FOLDER [--mu 0.04]
+
+Every number comes from the CSV files the aggregator wrote (paper units); this script only draws.
+--mu selects the friction coefficient of the series and joint-PDF figures (the paper's 0.04).
+"""
+import argparse
+import csv
+import math
+import os
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def read(folder, name):
+    with open(os.path.join(folder, name), newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def col(rows, key):
+    return [float(r[key]) for r in rows]
+
+
+def closest(values, target):
+    """The value in `values` nearest to target, or None if there is none."""
+    values = sorted(set(values))
+    return min(values, key=lambda v: abs(v - target)) if values else None
+
+
+def labels_of(series):
+    """S1, S2, S3 labels for the runs of the series file."""
+    def label(row):
+        if row["kind"] == "S1":
+            return "S1"
+        return "S%d" % (int(row["index"]) + 2)
+    return label
+
+
+def series_figures(folder, mu, out):
+    rows = read(folder, "series.csv")
+    mu_s = closest([float(r["mu"]) for r in rows], mu)
+    if mu_s is None:
+        print("plot_report: series.csv is empty; Figs. 5-7 not drawn", file=sys.stderr)
+        return
+    label = labels_of(rows)
+    runs = {}
+    for r in rows:
+        if float(r["mu"]) == mu_s:
+            runs.setdefault(label(r), []).append(r)
+    names = sorted(runs)
+    batch = {r["key"]: float(r["value"]) for r in read(folder, "batch.csv")}
+
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for n in names:
+        ax.plot(col(runs[n], "t[s]"), col(runs[n], "phi[mm/s^2]"), lw=0.8, label=n)
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("Φ [mm/s²]")
+    ax.set_title("Load processes (Fig. 5)")
+    ax.legend()
+    out(fig, "fig05_load.png")
+
+    fig, axes = plt.subplots(len(names), 1, figsize=(7, 2.2 * len(names)), sharex=True, squeeze=False)
+    for ax, n in zip(axes[:, 0], names):
+        ax.plot(col(runs[n], "t[s]"), col(runs[n], "delta[mm]"), lw=0.5)
+        ax.set_ylabel("δ [mm]")
+        ax.set_title("%s, μ = %g" % (n, mu_s), fontsize=9)
+    axes[-1, 0].set_xlabel("t [s]")
+    fig.suptitle("Relative displacement (Fig. 6)")
+    out(fig, "fig06_delta.png")
+
+    hi = batch["duration"]
+    lo = hi - batch["window"]
+    fig, axes = plt.subplots(1, len(names), figsize=(3.3 * len(names), 3.3), squeeze=False)
+    for ax, n in zip(axes[0], names):
+        w = [r for r in runs[n] if lo <= float(r["t[s]"]) <= hi]
+        ax.plot(col(w, "delta[mm]"), col(w, "delta_dot[mm/s]"), lw=0.4)
+        ax.set_xlabel("δ [mm]")
+        ax.set_title(n, fontsize=9)
+    axes[0, 0].set_ylabel(r"$\dot{\delta}$ [mm/s]")
+    fig.suptitle("Phase portraits on [%g, %g] s, μ = %g (Fig. 7)" % (lo, hi, mu_s))
+    out(fig, "fig07_phase.png")
+
+
+def center_distance_figures(folder, out):
+    t3 = read(folder, "table3.csv")
+    box = [r for r in read(folder, "box_stats.csv") if r["quantity"] == "d"]
+    mus = col(t3, "mu")
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for key, name, style in (("s1_d", "S1", "o-"), ("s2_d", "S2", "s-"), ("s3_d", "S3", "^-")):
+        ax.plot(mus, col(t3, key + "[mm*s^-1/2]"), style, label=name)
+    phase = [r for r in box if r["group"] == "phase" and int(r["n"]) > 0]
+    if phase:
+        ax.fill_between(col(phase, "mu"), col(phase, "min"), col(phase, "max"), color="0.85",
+                        label="phase ensemble min–max")
+        ax.plot(col(phase, "mu"), col(phase, "median"), "k--", lw=0.8, label="phase ensemble median")
+    ax.set_xlabel("μ")
+    ax.set_ylabel("d [mm·s$^{-1/2}$]")
+    ax.set_title("Center distance of S1, S2, S3 (Fig. 8)")
+    ax.legend(fontsize=8)
+    out(fig, "fig08_center_distance.png")
+
+    stoch = [r for r in box if r["group"] == "stochastic" and int(r["n"]) > 0]
+    stats = [{"med": float(r["median"]), "q1": float(r["q1"]), "q3": float(r["q3"]), "whislo": float(r["min"]),
+              "whishi": float(r["max"]), "cilo": float(r["median_low"]), "cihi": float(r["median_high"]),
+              "fliers": [], "label": "%g" % float(r["mu"])} for r in stoch]
+    fig, ax = plt.subplots(figsize=(6, 4))
+    if stats:
+        ax.bxp(stats, shownotches=True, showfliers=False)
+        s1 = {float(r["mu"]): float(r["s1_d[mm*s^-1/2]"]) for r in t3}
+        ax.plot(range(1, len(stoch) + 1), [s1.get(float(r["mu"]), math.nan) for r in stoch], "rx", label="S1")
+        ax.legend(fontsize=8)
+    ax.set_xlabel("μ")
+    ax.set_ylabel("d [mm·s$^{-1/2}$]")
+    ax.set_title("Center distance, stochastic load (Fig. 9)\nwhiskers min–max, notches: median interval")
+    out(fig, "fig09_boxplot.png")
+
+
+def joint_figure(folder, mu, out):
+    rows = read(folder, "joint_pdf.csv")
+    mu_j = closest(col(rows, "mu"), mu)
+    if mu_j is None:
+        return
+    rows = [r for r in rows if float(r["mu"]) == mu_j]
+    times = sorted(set(col(rows, "t[s]")))
+    ncol = 2 if len(times) > 1 else 1
+    nrow = int(math.ceil(len(times) / ncol))
+    fig, axes = plt.subplots(nrow, ncol, figsize=(5 * ncol, 3.6 * nrow), squeeze=False)
+    for ax, t in zip(axes.flat, times):
+        cells = [r for r in rows if float(r["t[s]"]) == t]
+        xs = sorted(set(col(cells, "delta_lo[mm]")) | set(col(cells, "delta_hi[mm]")))
+        ys = sorted(set(col(cells, "delta_dot_lo[mm/s]")) | set(col(cells, "delta_dot_hi[mm/s]")))
+        grid = [[0.0] * (len(xs) - 1) for _ in range(len(ys) - 1)]
+        for c in cells:
+            grid[ys.index(float(c["delta_dot_lo[mm/s]"]))][xs.index(float(c["delta_lo[mm]"]))] = float(c["density[s/mm^2]"])
+        m = ax.pcolormesh(xs, ys, grid, cmap="viridis", shading="flat")
+        fig.colorbar(m, ax=ax, label="density [s/mm²]")
+        ax.set_title("t = %g s" % t)
+        ax.set_xlabel("δ [mm]")
+        ax.set_ylabel(r"$\dot{\delta}$ [mm/s]")
+    for ax in list(axes.flat)[len(times):]:
+        ax.axis("off")
+    fig.suptitle(r"Joint PDF of ($\delta$, $\dot{\delta}$), μ = %g (Fig. 10)" % mu_j)
+    out(fig, "fig10_joint_pdf.png")
+
+
+def pdf_figure(folder, name, unit, label, title, filename, out):
+    """One panel per mu (small multiples read better than six overlaid histograms)."""
+    rows = read(folder, name)
+    outside = {(float(r["mu"]), r["quantity"]): float(r["fraction"]) for r in read(folder, "pdf_outside.csv")}
+    quantity = "delta_T" if unit == "mm" else "delta_dot_T"
+    mus = sorted(set(col(rows, "mu")))
+    ncol = min(3, len(mus))
+    nrow = int(math.ceil(len(mus) / ncol))
+    fig, axes = plt.subplots(nrow, ncol, figsize=(3.4 * ncol, 2.6 * nrow), sharex=True, sharey=True, squeeze=False)
+    density = [k for k in rows[0] if k.startswith("density")][0]
+    for ax, mu in zip(axes.flat, mus):
+        r = [x for x in rows if float(x["mu"]) == mu]
+        edges = col(r, "lo[%s]" % unit) + [float(r[-1]["hi[%s]" % unit])]
+        ax.stairs(col(r, density), edges, fill=True, alpha=0.6)
+        ax.set_title("μ = %g (%.0f %% outside)" % (mu, 100 * outside.get((mu, quantity), 0.0)), fontsize=9)
+    for ax in axes[-1]:
+        ax.set_xlabel("%s [%s]" % (label, unit))
+    for ax in axes[:, 0]:
+        ax.set_ylabel("PDF [%s]" % density[density.index("[") + 1:-1])
+    for ax in list(axes.flat)[len(mus):]:
+        ax.axis("off")
+    fig.suptitle(title)
+    out(fig, filename)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("folder")
+    parser.add_argument("--mu", type=float, default=0.04, help="mu of Figs. 5-7 and 10 (default 0.04)")
+    args = parser.parse_args()
+
+    def out(fig, filename):
+        fig.tight_layout()
+        fig.savefig(os.path.join(args.folder, filename), dpi=120)
+        plt.close(fig)
+
+    series_figures(args.folder, args.mu, out)
+    center_distance_figures(args.folder, out)
+    joint_figure(args.folder, args.mu, out)
+    pdf_figure(args.folder, "pdf_delta.csv", "mm", "δ(T)", "PDF of δ at T (Fig. 11)", "fig11_pdf_delta.png", out)
+    pdf_figure(args.folder, "pdf_delta_dot.csv", "mm/s", r"$\dot{\delta}$(T)", r"PDF of $\dot{\delta}$ at T (Fig. 12)",
+               "fig12_pdf_delta_dot.png", out)
+    print("plot_report: figures written to %s" % args.folder)
+
+
+if __name__ == "__main__":
+    main()
