@@ -10,9 +10,12 @@ namespace gear_dynamics {
 
 // Ranges of delta and delta_dot over the trailing window [t - W, t] (clipped at 0), hence the
 // instantaneous center distance d(t) = sqrt(range(delta) * range(delta_dot)) (paper Eq. 22).
-// Keeps extrema per block of `block_steps` grid points: memory is window/block + 2 blocks, the
-// update O(1) per step. The window is exact when the last observed step is a multiple of
-// block_steps; otherwise it also covers up to block_steps - 1 earlier grid points.
+// Keeps extrema per block of `block_steps` grid points (block_steps must divide window_steps) and
+// combines them by van Herk / Gil-Werman: the window's blocks are a suffix of the previous segment
+// of window/block + 1 blocks and a prefix of the current one. Memory is 2 (window/block + 1)
+// blocks; observe and every query cost O(1) amortized, however often d(t) is read. The window is
+// exact when the last observed step is a multiple of block_steps; otherwise it also covers up to
+// block_steps - 1 earlier grid points.
 class WindowRange {
  public:
   WindowRange(int lanes, std::int64_t window_steps, std::int64_t block_steps);
@@ -27,16 +30,18 @@ class WindowRange {
   Eigen::ArrayXd center_distance() const;  // [m s^-1/2] in SI
 
   std::int64_t block_steps() const { return block_; }
-  int capacity_blocks() const { return static_cast<int>(slot_block_.size()); }
+  int capacity_blocks() const { return static_cast<int>(segment_); }
 
  private:
-  void reduce(Eigen::ArrayXd& dmax, Eigen::ArrayXd& dmin, Eigen::ArrayXd& vmax,
-              Eigen::ArrayXd& vmin) const;
-  std::int64_t window_, block_;
-  std::int64_t last_ = -1;
-  // Ring of per-block extrema: column k holds block slot_block_[k] (-1 = empty).
-  Eigen::ArrayXXd dmax_, dmin_, vmax_, vmin_;
-  std::vector<std::int64_t> slot_block_;
+  // Maxima of (delta, -delta, delta_dot, -delta_dot) stacked: one max covers all four extrema.
+  Eigen::ArrayXd reduce() const;
+  int lanes_;
+  std::int64_t window_, block_, segment_;  // segment_ = blocks per segment = window/block + 1
+  std::int64_t last_ = -1, block_index_ = -1, segment_index_ = -1;
+  Eigen::ArrayXXd blocks_;  // column i: block segment_index_ * segment_ + i (-inf = no sample)
+  Eigen::ArrayXXd suffix_;  // column i: blocks i..segment_-1 of the previous segment
+  Eigen::ArrayXd prefix_;   // blocks of the current segment before block_index_
+  Eigen::ArrayXd sample_;   // scratch
 };
 
 // t_ss: the last grid time at which |delta - b| > tolerance, 0 if none (MODEL.md §8).

@@ -11,74 +11,70 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 }
 
 WindowRange::WindowRange(int lanes, std::int64_t window_steps, std::int64_t block_steps)
-    : window_(window_steps), block_(block_steps) {
-  if (lanes <= 0 || window_steps < 0 || block_steps <= 0)
-    throw std::invalid_argument("WindowRange: needs lanes > 0, window_steps >= 0, block_steps > 0");
-  // Blocks that can overlap a window: the current one and those reaching back window_ points.
-  const auto slots = static_cast<Eigen::Index>(window_ / block_ + 2);
-  dmax_.resize(lanes, slots);
-  dmin_.resize(lanes, slots);
-  vmax_.resize(lanes, slots);
-  vmin_.resize(lanes, slots);
-  slot_block_.assign(slots, -1);
+    : lanes_(lanes), window_(window_steps), block_(block_steps) {
+  if (lanes <= 0 || window_steps < 0 || block_steps <= 0 || window_steps % block_steps != 0)
+    throw std::invalid_argument("WindowRange: needs lanes > 0, window_steps >= 0, block_steps > 0 dividing window_steps");
+  segment_ = window_ / block_ + 1;  // an exact window spans this many blocks
+  const auto segment = static_cast<Eigen::Index>(segment_);
+  blocks_.resize(4 * lanes, segment);
+  suffix_.resize(4 * lanes, segment);
+  prefix_.resize(4 * lanes);
+  sample_.resize(4 * lanes);
   reset();
 }
 
 void WindowRange::reset() {
-  last_ = -1;
-  std::fill(slot_block_.begin(), slot_block_.end(), -1);
+  last_ = block_index_ = segment_index_ = -1;
+  blocks_.setConstant(-kInf);
+  suffix_.setConstant(-kInf);
+  prefix_.setConstant(-kInf);
 }
 
 void WindowRange::observe(std::int64_t n, const Eigen::Ref<const Eigen::ArrayXd>& delta,
                           const Eigen::Ref<const Eigen::ArrayXd>& velocity) {
+  sample_ << delta, -delta, velocity, -velocity;
   const std::int64_t block = n / block_;
-  const auto k = static_cast<Eigen::Index>(block % static_cast<std::int64_t>(slot_block_.size()));
-  if (slot_block_[k] != block) {  // first sample of a new block: it takes the oldest slot
-    slot_block_[k] = block;
-    dmax_.col(k) = delta;
-    dmin_.col(k) = delta;
-    vmax_.col(k) = velocity;
-    vmin_.col(k) = velocity;
-  } else {
-    dmax_.col(k) = dmax_.col(k).max(delta);
-    dmin_.col(k) = dmin_.col(k).min(delta);
-    vmax_.col(k) = vmax_.col(k).max(velocity);
-    vmin_.col(k) = vmin_.col(k).min(velocity);
+  if (block != block_index_) {
+    const std::int64_t segment = block / segment_;
+    if (segment != segment_index_) {
+      if (segment == segment_index_ + 1) {  // the finished segment's suffix maxima
+        suffix_.col(segment_ - 1) = blocks_.col(segment_ - 1);
+        for (Eigen::Index i = segment_ - 2; i >= 0; --i) suffix_.col(i) = blocks_.col(i).max(suffix_.col(i + 1));
+      } else {  // first sample, or a gap: the previous segment holds nothing observed
+        suffix_.setConstant(-kInf);
+      }
+      blocks_.setConstant(-kInf);
+      prefix_.setConstant(-kInf);
+      segment_index_ = segment;
+    } else {
+      prefix_ = prefix_.max(blocks_.col(block_index_ - segment * segment_));
+    }
+    block_index_ = block;
   }
+  auto current = blocks_.col(block - segment_index_ * segment_);
+  current = current.max(sample_);
   last_ = n;
 }
 
-void WindowRange::reduce(Eigen::ArrayXd& dmax, Eigen::ArrayXd& dmin, Eigen::ArrayXd& vmax,
-                         Eigen::ArrayXd& vmin) const {
-  const auto lanes = dmax_.rows();
-  dmax.setConstant(lanes, -kInf);
-  dmin.setConstant(lanes, kInf);
-  vmax.setConstant(lanes, -kInf);
-  vmin.setConstant(lanes, kInf);
-  if (last_ < 0) return;
-  const std::int64_t first = last_ - window_;  // first grid point of the window
-  for (std::size_t k = 0; k < slot_block_.size(); ++k) {
-    const std::int64_t b = slot_block_[k];
-    // A block counts if it overlaps [first, last_] (its last point is (b + 1) * block_ - 1).
-    if (b < 0 || (b + 1) * block_ - 1 < first || b * block_ > last_) continue;
-    const auto kk = static_cast<Eigen::Index>(k);
-    dmax = dmax.max(dmax_.col(kk));
-    dmin = dmin.min(dmin_.col(kk));
-    vmax = vmax.max(vmax_.col(kk));
-    vmin = vmin.min(vmin_.col(kk));
-  }
+Eigen::ArrayXd WindowRange::reduce() const {
+  if (last_ < 0) return Eigen::ArrayXd::Constant(4 * lanes_, -kInf);
+  // The window's blocks: first .. block_index_, block_index_ - first + 1 = segment_ of them.
+  const std::int64_t first = block_index_ - (segment_ - 1);
+  Eigen::ArrayXd m = prefix_.max(blocks_.col(block_index_ - segment_index_ * segment_));
+  if (first < segment_index_ * segment_) m = m.max(suffix_.col(first - (segment_index_ - 1) * segment_));
+  return m;
 }
 
 Eigen::ArrayXd WindowRange::delta_range() const {
-  Eigen::ArrayXd dmax, dmin, vmax, vmin;
-  reduce(dmax, dmin, vmax, vmin);
-  return last_ < 0 ? Eigen::ArrayXd::Zero(dmax.size()).eval() : (dmax - dmin).eval();
+  if (last_ < 0) return Eigen::ArrayXd::Zero(lanes_);
+  const Eigen::ArrayXd m = reduce();
+  return m.segment(0, lanes_) + m.segment(lanes_, lanes_);  // max + (-min)
 }
 
 Eigen::ArrayXd WindowRange::velocity_range() const {
-  Eigen::ArrayXd dmax, dmin, vmax, vmin;
-  reduce(dmax, dmin, vmax, vmin);
-  return last_ < 0 ? Eigen::ArrayXd::Zero(vmax.size()).eval() : (vmax - vmin).eval();
+  if (last_ < 0) return Eigen::ArrayXd::Zero(lanes_);
+  const Eigen::ArrayXd m = reduce();
+  return m.segment(2 * lanes_, lanes_) + m.segment(3 * lanes_, lanes_);
 }
 
 Eigen::ArrayXd WindowRange::center_distance() const {

@@ -64,6 +64,35 @@ TEST(WindowRange, WindowEdgesAreInclusive) {
   EXPECT_EQ(early.velocity_range()[0], 40.0);
 }
 
+// Read at every step, across many segments, observed from a late start (as simulate() does when it
+// only needs the last window): the window is [n - W, n] widened back to the start of its first
+// block, and clipped at the first observed step.
+TEST(WindowRange, EveryStepAcrossSegmentsFromALateStart) {
+  const std::int64_t window = 60, block = 20, start = 37;
+  gd::WindowRange range(2, window, block);
+  for (std::int64_t n = start; n <= 1000; ++n) {
+    Eigen::ArrayXd d(2), v(2);
+    for (int l = 0; l < 2; ++l) {
+      d[l] = sig_d(n, l);
+      v[l] = sig_v(n, l);
+    }
+    range.observe(n, d, v);
+    const std::int64_t first = std::max(start, n - window < 0 ? 0 : (n - window) / block * block);
+    for (int l = 0; l < 2; ++l) {
+      double dmax = -1e300, dmin = 1e300, vmax = -1e300, vmin = 1e300;
+      for (std::int64_t k = first; k <= n; ++k) {
+        dmax = std::max(dmax, sig_d(k, l));
+        dmin = std::min(dmin, sig_d(k, l));
+        vmax = std::max(vmax, sig_v(k, l));
+        vmin = std::min(vmin, sig_v(k, l));
+      }
+      ASSERT_EQ(range.delta_range()[l], dmax - dmin) << "n " << n;
+      ASSERT_EQ(range.velocity_range()[l], vmax - vmin) << "n " << n;
+    }
+  }
+  EXPECT_THROW(gd::WindowRange(1, 50, 20), std::invalid_argument);  // a block must divide the window
+}
+
 TEST(SteadyStateTime, LastExcursionBeyondTolerance) {
   gd::SteadyStateTime settle(2, 1.0, 0.1);
   for (int n = 0; n <= 100; ++n) {
