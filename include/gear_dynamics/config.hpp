@@ -64,4 +64,12 @@ LaneSpec deterministic_lane(const ModelConfig& config, double mu);
 // Checks that hold between parameters, e.g. for values changed at run time: throws ConfigError.
 void validate_consistency(const ModelConfig& config);
 
+// Helpers for validating other YAML sections the same way.
+namespace detail {
+// Parses one scalar as a number; false if it is not one (booleans and strings are not).
+bool as_number(const YAML::Node& n, double& out);
+// A node as one line of YAML, for error messages.
+std::string show(const YAML::Node& n);
+}  // namespace detail
+
 }  // namespace gear_dynamics

@@ -7,7 +7,32 @@
 
 namespace gear_dynamics {
 
+namespace detail {
+
+std::string show(const YAML::Node& n) {
+  YAML::Emitter e;
+  e << YAML::Flow << n;
+  return e.c_str();
+}
+
+bool as_number(const YAML::Node& n, double& out) {
+  if (!n.IsScalar()) return false;
+  const std::string& s = n.Scalar();
+  if (s == "true" || s == "false" || s == "True" || s == "False") return false;
+  try {
+    out = n.as<double>();
+    return true;
+  } catch (const YAML::Exception&) {
+    return false;
+  }
+}
+
+}  // namespace detail
+
 namespace {
+
+using detail::as_number;
+using detail::show;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kPi = 3.14159265358979323846;
@@ -111,27 +136,8 @@ std::string range_text(const Field& f) {
   return s.str();
 }
 
-std::string show(const YAML::Node& n) {
-  YAML::Emitter e;
-  e << YAML::Flow << n;
-  return e.c_str();
-}
-
 bool in_range(const Field& f, double v) {
   return (f.open_lo ? v > f.lo : v >= f.lo) && (f.open_hi ? v < f.hi : v <= f.hi);
-}
-
-// Parses one scalar as a number; false if it is not one (booleans and strings are not).
-bool as_number(const YAML::Node& n, double& out) {
-  if (!n.IsScalar()) return false;
-  const std::string& s = n.Scalar();
-  if (s == "true" || s == "false" || s == "True" || s == "False") return false;
-  try {
-    out = n.as<double>();
-    return true;
-  } catch (const YAML::Exception&) {
-    return false;
-  }
 }
 
 void check_value(const Field& f, const std::string& path, double v, std::vector<std::string>& errors) {

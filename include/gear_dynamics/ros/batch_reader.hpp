@@ -9,14 +9,9 @@
 #include <vector>
 
 #include "gear_dynamics/report.hpp"
+#include "gear_dynamics/ros/conversions.hpp"  // topics of a run bag, manifest format
 
 namespace gear_dynamics {
-
-// Topics of a run bag.
-constexpr const char* kRunInfoTopic = "/gear/run_info";
-constexpr const char* kStateTopic = "/gear/state";
-constexpr const char* kSummaryTopic = "/gear/summary";
-constexpr const char* kManifestFormat = "gear_dynamics_batch/1";
 
 // The batch cannot be read at all: no folder, no manifest, manifests of different batches, or a
 // folder without a usable bag.

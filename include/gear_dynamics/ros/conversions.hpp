@@ -11,6 +11,7 @@
 #include "gear_dynamics/GearState.h"
 #include "gear_dynamics/RunInfo.h"
 #include "gear_dynamics/RunSummary.h"
+#include "gear_dynamics/batch.hpp"  // run kinds
 #include "gear_dynamics/config.hpp"
 #include "gear_dynamics/ensemble.hpp"
 #include "gear_dynamics/simulation.hpp"
@@ -27,10 +28,11 @@ inline ros::Time sim_stamp(double t) { return ros::Time(kClockOffset + t); }
 YAML::Node yaml_from_parameters(const ros::NodeHandle& nh, const std::vector<std::string>& sections);
 ModelConfig load_model_config(const ros::NodeHandle& nh);
 
-// Run kinds as written in RunInfo.kind and RunSummary.kind.
-constexpr const char* kKindS1 = "S1";
-constexpr const char* kKindPhase = "phase";
-constexpr const char* kKindStochastic = "stochastic";
+// The batch folder contract (PROTOCOL.md): topics of a run bag and the manifest format.
+constexpr const char* kRunInfoTopic = "/gear/run_info";
+constexpr const char* kStateTopic = "/gear/state";
+constexpr const char* kSummaryTopic = "/gear/summary";
+constexpr const char* kManifestFormat = "gear_dynamics_batch/1";
 
 RunInfo make_run_info(const ModelConfig& config, const std::string& kind, std::uint32_t realization,
                       double mu, double sigma, double duration);

@@ -1,0 +1,103 @@
+// Monte Carlo batches (MODEL.md §4, §6): the run set of a μ sweep, its split into shards, blocks of
+// lanes that share a mesh phase, and running the blocks in parallel with TBB. No ROS: what happens
+// to a run's states and result is up to a BatchSink (the batch node writes bags).
+//
+// A run's numbers depend only on (configuration, run): its random stream is keyed by (seed,
+// realization) and the Ensemble keeps lanes independent, so the output is bit-identical for any
+// block size, thread count, shard split and order.
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <atomic>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "gear_dynamics/config.hpp"
+#include "gear_dynamics/ensemble.hpp"
+#include "gear_dynamics/simulation.hpp"
+
+namespace gear_dynamics {
+
+// Run kinds as written in RunInfo.kind, RunSummary.kind and the manifest.
+constexpr const char* kKindS1 = "S1";                  // deterministic, configured mesh phase
+constexpr const char* kKindPhase = "phase";            // deterministic, phi0 = j phi_n / 64
+constexpr const char* kKindStochastic = "stochastic";  // realization r of the load process
+constexpr int kPhaseEnsembleSize = 64;                 // MODEL.md §6
+
+// The `monte_carlo` section (config/monte_carlo.yaml).
+struct BatchSettings {
+  // What the batch holds: the manifest records these and resume compares them.
+  std::vector<double> mu{0.0, 0.01, 0.02, 0.03, 0.04, 0.05};  // friction coefficients [-]
+  std::uint32_t realizations = 100;     // R: stochastic realizations 0..R-1 per mu
+  bool phase_ensemble = true;           // S1 repeated over phi0 = j phi_n / 64, j = 0..63
+  double record_rate = 1.0e5;           // [Hz] series of S1 and realizations < record_realizations
+  std::uint32_t record_realizations = 2;  // S2 = realization 0, S3 = realization 1
+  double sparse_record_rate = 100.0;    // [Hz] series of every other run; 0 = none
+  // How it runs: no effect on any bag's content.
+  std::string output_dir = "batch";
+  bool overwrite = false;               // replace a folder that holds another batch
+  int shard_index = 0, shard_count = 1;
+  int block_lanes = 8;                  // realizations stepped together
+  int threads = 0;                      // 0 = all cores
+};
+
+// Validates the `monte_carlo` map against `model` (the record rates must divide its grid).
+// Throws ConfigError naming every bad key, its value and the allowed range.
+BatchSettings parse_batch_settings(const YAML::Node& section, const ModelConfig& model);
+// The settings that define the batch's content, as a `monte_carlo` map (for the manifest).
+YAML::Node content_yaml(const BatchSettings& settings);
+
+struct RunSpec {
+  std::size_t id = 0;           // position in the whole batch (plan order)
+  std::string name;             // mu0.0400_S1, mu0.0400_phase07, mu0.0400_r00012
+  std::string kind;             // kKindS1, kKindPhase or kKindStochastic
+  double mu = 0.0;
+  std::uint32_t index = 0;      // realization r, phase member j, 0 for S1
+  double mesh_phase = 0.0;      // phi0 [rad]
+  std::int64_t record_every = 0;  // grid steps between recorded states; 0 = no series
+};
+
+// Every run of the batch: for each mu, S1, the phase ensemble (if on), realizations 0..R-1.
+std::vector<RunSpec> plan_runs(const ModelConfig& model, const BatchSettings& settings);
+// Runs i with i % count == index: shards are disjoint, their union is the batch, and each gets
+// a like share of every kind and mu.
+std::vector<RunSpec> shard_runs(const std::vector<RunSpec>& runs, int index, int count);
+// The model configuration of one run (its mu and phi0), and its lane.
+ModelConfig run_config(const ModelConfig& model, const RunSpec& run);
+LaneSpec run_lane(const ModelConfig& model, const RunSpec& run);
+
+// Groups of at most `lanes` runs that share phi0 and record interval, in the order given.
+std::vector<std::vector<RunSpec>> make_blocks(const std::vector<RunSpec>& runs, int lanes);
+
+// Receives what a batch produces. Calls for one block come from one thread, in order (started,
+// recorded..., then finished or abandoned); different blocks call concurrently. Lane i of the
+// ensemble is block[i].
+class BatchSink {
+ public:
+  virtual ~BatchSink() = default;
+  virtual void started(const std::vector<RunSpec>& block) = 0;
+  // At every grid step that is a multiple of the block's record_every (t = 0 and T included).
+  virtual void recorded(const std::vector<RunSpec>& block, const Ensemble& ensemble,
+                        const Eigen::ArrayXd& center_distance) = 0;
+  virtual void finished(const std::vector<RunSpec>& block, const std::vector<RunResult>& results) = 0;
+  // Stopped before the end (BatchControl::stop).
+  virtual void abandoned(const std::vector<RunSpec>& block) = 0;
+};
+
+struct BatchControl {
+  std::atomic<bool> stop{false};  // set from anywhere: no new block starts, recording blocks stop
+  std::atomic<std::int64_t> realization_steps{0};  // stepped so far (lanes x steps)
+};
+
+// Threads a batch runs on: settings.threads, or all cores available to the process if 0.
+int batch_threads(const BatchSettings& settings);
+
+// Steps `runs` in blocks of settings.block_lanes on settings.threads threads. After `stop`, blocks
+// that record are abandoned at their next recorded step; blocks without a series finish.
+// Rethrows the first error (e.g. DivergenceError) after the blocks in flight have ended.
+void run_batch(const ModelConfig& model, const std::vector<RunSpec>& runs,
+               const BatchSettings& settings, BatchSink& sink, BatchControl& control);
+
+}  // namespace gear_dynamics

@@ -1,0 +1,114 @@
+// The batch folder contract (PROTOCOL.md): one LZ4 bag per run, written as <name>.bag.active and
+// renamed after a clean close (RunInfo first, the decimated GearState series, RunSummary last), a
+// manifest written atomically, and resume. Writer: gear_monte_carlo; reader: gear_aggregator.
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <atomic>
+#include <condition_variable>
+#include <deque>
+#include <exception>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <unordered_map>
+#include <variant>
+#include <vector>
+
+#include "gear_dynamics/batch.hpp"
+#include "gear_dynamics/ros/conversions.hpp"
+
+namespace rosbag {
+class Bag;
+}
+
+namespace gear_dynamics {
+
+// The manifest's `config`: the model (to_yaml) plus the `monte_carlo` settings that define the
+// batch's content. Two batches are the same batch if these are equal.
+YAML::Node batch_config_yaml(const ModelConfig& model, const BatchSettings& settings);
+
+// The RunInfo a run's bag starts with.
+RunInfo run_info(const ModelConfig& model, const RunSpec& run);
+
+// True if `path` is a complete bag of `expected`'s run: readable index, exactly one run_info equal
+// to `expected`, exactly one summary.
+bool bag_complete(const std::string& path, const RunInfo& expected);
+
+// Makes settings.output_dir ready for `runs` (this shard's part of the batch) and returns the runs
+// still to do. A folder of the same batch (and split into shards) is resumed: complete bags whose
+// run_info matches are kept, the other runs' files are removed. Any other non-empty folder is
+// refused (std::runtime_error saying why) unless settings.overwrite, which removes its bags and
+// manifests.
+std::vector<RunSpec> prepare_folder(const ModelConfig& model, const BatchSettings& settings,
+                                    const std::vector<RunSpec>& runs);
+
+// manifest.yaml, or manifest_shard<i>of<n>.yaml for shard i of n > 1 (shards may share a folder).
+std::string manifest_file(const BatchSettings& settings);
+
+// Writes the manifest into settings.output_dir atomically (temporary file, then rename).
+void write_manifest(const ModelConfig& model, const BatchSettings& settings,
+                    const std::vector<RunSpec>& runs, bool complete);
+
+// Writes the bags on a thread of its own, fed through a bounded queue: bag writing overlaps with
+// stepping, and memory stays bounded (the queue, plus one open bag per lane in flight).
+class BagSink : public BatchSink {
+ public:
+  BagSink(const ModelConfig& model, std::string folder, std::size_t queue_capacity = 1 << 15);
+  ~BagSink() override;
+
+  void started(const std::vector<RunSpec>& block) override;
+  void recorded(const std::vector<RunSpec>& block, const Ensemble& ensemble,
+                const Eigen::ArrayXd& center_distance) override;
+  void finished(const std::vector<RunSpec>& block, const std::vector<RunResult>& results) override;
+  void abandoned(const std::vector<RunSpec>& block) override;
+
+  // Writes what is queued and stops the writer; bags of runs that did not finish are closed and
+  // stay .active. Rethrows the writer's first error.
+  void finish();
+
+  std::size_t bags_written() const { return written_; }  // renamed to .bag
+  double writer_cpu_seconds() const { return cpu_seconds_; }  // CPU time of the writer, after finish()
+
+ private:
+  struct Open {
+    std::string name;
+    RunInfo info;
+  };
+  struct Close {
+    RunSummary summary;
+  };
+  struct Abandon {};
+  struct Item {
+    std::size_t id;  // RunSpec::id
+    std::variant<Open, GearState, Close, Abandon> what;
+  };
+
+  void push(std::vector<Item>&& items);
+  void loop();
+  void write(Item& item);
+
+  ModelConfig model_;
+  std::string folder_;
+  std::size_t capacity_;
+
+  std::mutex mutex_;
+  std::condition_variable not_empty_, not_full_;
+  std::deque<std::vector<Item>> queue_;
+  std::size_t queued_ = 0;
+  bool done_ = false;
+  std::exception_ptr error_;
+
+  struct OpenBag {
+    std::string name;
+    std::unique_ptr<rosbag::Bag> bag;
+  };
+  std::unordered_map<std::size_t, OpenBag> open_;  // by RunSpec::id; writer thread only
+  std::atomic<std::size_t> written_{0};
+  double cpu_seconds_ = 0.0;
+  std::thread thread_;
+};
+
+}  // namespace gear_dynamics

@@ -1,0 +1,275 @@
+#include "gear_dynamics/ros/batch_io.hpp"
+
+#include <rosbag/bag.h>
+#include <rosbag/view.h>
+
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
+namespace gear_dynamics {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string emit(const YAML::Node& n) {
+  YAML::Emitter out;
+  out << n;
+  return out.c_str();
+}
+
+fs::path bag_path(const std::string& folder, const std::string& name) { return fs::path(folder) / (name + ".bag"); }
+fs::path active_path(const std::string& folder, const std::string& name) {
+  return fs::path(folder) / (name + ".bag.active");
+}
+
+bool ends_with(const std::string& s, const std::string& tail) {
+  return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+}
+
+bool is_manifest(const std::string& file) { return file.rfind("manifest", 0) == 0 && ends_with(file, ".yaml"); }
+
+// Why the folder cannot take this shard of this batch, or "" if it can. Shards of one batch may
+// share a folder (each writes its own manifest); anything else is another batch.
+std::string refusal(const fs::path& dir, const YAML::Node& config, const BatchSettings& s) {
+  bool manifests = false, other_files = false;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    const std::string file = entry.path().filename().string();
+    if (!is_manifest(file)) {
+      other_files = other_files || !ends_with(file, ".tmp");  // a manifest being written
+      continue;
+    }
+    manifests = true;
+    YAML::Node m;
+    try {
+      m = YAML::LoadFile(entry.path().string());
+    } catch (const YAML::Exception& e) {
+      return entry.path().string() + " is not valid YAML (" + e.what() + ")";
+    }
+    if (!m.IsMap() || !m["format"] || m["format"].as<std::string>() != kManifestFormat)
+      return entry.path().string() + " is not a " + kManifestFormat + " manifest";
+    if (emit(m["config"]) != emit(config)) return "it holds a batch with a different configuration (" + file + ")";
+    if (!m["shard_count"] || m["shard_count"].as<int>() != s.shard_count)
+      return "it holds the same batch split into " + (m["shard_count"] ? m["shard_count"].as<std::string>() : "?") +
+             " shards (" + file + "), not " + std::to_string(s.shard_count);
+  }
+  return !manifests && other_files ? "it is not empty and holds no manifest" : "";
+}
+
+}  // namespace
+
+std::string manifest_file(const BatchSettings& settings) {
+  if (settings.shard_count == 1) return "manifest.yaml";
+  return "manifest_shard" + std::to_string(settings.shard_index) + "of" + std::to_string(settings.shard_count) + ".yaml";
+}
+
+YAML::Node batch_config_yaml(const ModelConfig& model, const BatchSettings& settings) {
+  YAML::Node n = to_yaml(model);
+  n["monte_carlo"] = content_yaml(settings);
+  return n;
+}
+
+RunInfo run_info(const ModelConfig& model, const RunSpec& run) {
+  return make_run_info(run_config(model, run), run.kind, run.index, run.mu, run_lane(model, run).sigma,
+                       model.run.duration);
+}
+
+bool bag_complete(const std::string& path, const RunInfo& expected) {
+  try {
+    rosbag::Bag bag(path, rosbag::bagmode::Read);
+    rosbag::View info(bag, rosbag::TopicQuery(kRunInfoTopic));
+    if (info.size() != 1) return false;
+    const RunInfo::ConstPtr stored = info.begin()->instantiate<RunInfo>();
+    if (!stored || !(*stored == expected)) return false;
+    return rosbag::View(bag, rosbag::TopicQuery(kSummaryTopic)).size() == 1;
+  } catch (const std::exception&) {  // rosbag::BagException, ros::Exception: unreadable
+    return false;
+  }
+}
+
+std::vector<RunSpec> prepare_folder(const ModelConfig& model, const BatchSettings& settings,
+                                    const std::vector<RunSpec>& runs) {
+  const fs::path dir(settings.output_dir);
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir))
+    throw std::runtime_error("monte_carlo.output_dir = '" + settings.output_dir + "' cannot be created: " + ec.message());
+
+  const std::string why = refusal(dir, batch_config_yaml(model, settings), settings);
+  if (!why.empty()) {
+    if (!settings.overwrite) {
+      throw std::runtime_error("monte_carlo.output_dir = '" + settings.output_dir + "' is refused: " + why +
+                               ". Use another folder, or overwrite:=true to replace its bags and manifest.");
+    }
+    for (const auto& entry : fs::directory_iterator(dir)) {
+      const std::string f = entry.path().filename().string();
+      if (ends_with(f, ".bag") || ends_with(f, ".bag.active") || is_manifest(f)) fs::remove(entry.path());
+    }
+  }
+
+  std::vector<RunSpec> todo;
+  for (const RunSpec& run : runs) {
+    const fs::path bag = bag_path(settings.output_dir, run.name);
+    if (fs::exists(bag) && bag_complete(bag.string(), run_info(model, run))) continue;
+    fs::remove(bag);
+    fs::remove(active_path(settings.output_dir, run.name));
+    todo.push_back(run);
+  }
+  return todo;
+}
+
+void write_manifest(const ModelConfig& model, const BatchSettings& settings,
+                    const std::vector<RunSpec>& runs, bool complete) {
+  YAML::Emitter out;
+  out << YAML::BeginMap;
+  out << YAML::Key << "format" << YAML::Value << kManifestFormat;
+  out << YAML::Key << "package_version" << YAML::Value << GEAR_DYNAMICS_VERSION;
+  out << YAML::Key << "complete" << YAML::Value << complete;  // every run's bag was written
+  out << YAML::Key << "config" << YAML::Value << batch_config_yaml(model, settings);
+  out << YAML::Key << "shard_index" << YAML::Value << settings.shard_index;
+  out << YAML::Key << "shard_count" << YAML::Value << settings.shard_count;
+  out << YAML::Key << "runs" << YAML::Value << YAML::BeginSeq;
+  for (const RunSpec& r : runs) {
+    out << YAML::Flow << YAML::BeginMap << YAML::Key << "name" << YAML::Value << r.name << YAML::Key << "kind"
+        << YAML::Value << r.kind << YAML::Key << "mu" << YAML::Value << r.mu << YAML::Key << "realization"
+        << YAML::Value << r.index << YAML::Key << "file" << YAML::Value << r.name + ".bag" << YAML::EndMap;
+  }
+  out << YAML::EndSeq << YAML::EndMap;
+
+  const fs::path dir(settings.output_dir), final_path = dir / manifest_file(settings);
+  const fs::path tmp = dir / (final_path.filename().string() + ".tmp");
+  {
+    std::ofstream f(tmp);
+    f << out.c_str() << "\n";
+    f.close();
+    if (!f) throw std::runtime_error("cannot write " + tmp.string());
+  }
+  fs::rename(tmp, final_path);
+}
+
+BagSink::BagSink(const ModelConfig& model, std::string folder, std::size_t queue_capacity)
+    : model_(model), folder_(std::move(folder)), capacity_(queue_capacity), thread_([this] { loop(); }) {}
+
+BagSink::~BagSink() {
+  try {
+    finish();
+  } catch (...) {  // reported by an explicit finish(); a destructor must not throw
+  }
+}
+
+void BagSink::started(const std::vector<RunSpec>& block) {
+  std::vector<Item> items;
+  for (const RunSpec& r : block) items.push_back({r.id, Open{r.name, run_info(model_, r)}});
+  push(std::move(items));
+}
+
+void BagSink::recorded(const std::vector<RunSpec>& block, const Ensemble& ensemble,
+                       const Eigen::ArrayXd& center_distance) {
+  std::vector<Item> items;
+  items.reserve(block.size());
+  for (std::size_t i = 0; i < block.size(); ++i) {
+    const int lane = static_cast<int>(i);
+    items.push_back({block[i].id, make_state(ensemble, lane, center_distance[lane])});
+  }
+  push(std::move(items));
+}
+
+void BagSink::finished(const std::vector<RunSpec>& block, const std::vector<RunResult>& results) {
+  std::vector<Item> items;
+  for (std::size_t i = 0; i < block.size(); ++i) {
+    const RunSpec& r = block[i];
+    items.push_back({r.id, Close{make_summary(r.name, r.kind, r.index, r.mu, r.mesh_phase, model_.run, results[i])}});
+  }
+  push(std::move(items));
+}
+
+void BagSink::abandoned(const std::vector<RunSpec>& block) {
+  std::vector<Item> items;
+  for (const RunSpec& r : block) items.push_back({r.id, Abandon{}});
+  push(std::move(items));
+}
+
+void BagSink::push(std::vector<Item>&& items) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  // A batch larger than the whole capacity still goes in once the queue is empty.
+  not_full_.wait(lock, [&] { return error_ || queued_ == 0 || queued_ + items.size() <= capacity_; });
+  if (error_) std::rethrow_exception(error_);
+  queued_ += items.size();
+  queue_.push_back(std::move(items));
+  not_empty_.notify_one();
+}
+
+void BagSink::loop() {
+  for (;;) {
+    std::vector<Item> batch;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      not_empty_.wait(lock, [&] { return !queue_.empty() || done_; });
+      if (queue_.empty()) break;
+      batch = std::move(queue_.front());
+      queue_.pop_front();
+      queued_ -= batch.size();
+      not_full_.notify_all();
+      if (error_) continue;  // drain without writing
+    }
+    try {
+      for (Item& item : batch) write(item);
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      error_ = std::current_exception();
+      not_full_.notify_all();
+    }
+  }
+  for (auto& kv : open_) {  // runs that never finished: their bags stay .active
+    try {
+      kv.second.bag->close();
+    } catch (...) {
+    }
+  }
+  open_.clear();
+  timespec cpu{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &cpu);
+  cpu_seconds_ = static_cast<double>(cpu.tv_sec) + 1e-9 * static_cast<double>(cpu.tv_nsec);
+}
+
+void BagSink::write(Item& item) {
+  if (auto* open = std::get_if<Open>(&item.what)) {
+    OpenBag& b = open_[item.id];
+    b.name = open->name;
+    b.bag = std::make_unique<rosbag::Bag>();
+    b.bag->open(active_path(folder_, b.name).string(), rosbag::bagmode::Write);
+    b.bag->setCompression(rosbag::compression::LZ4);
+    // Bag times are the header stamps, except that run_info goes 1 ns before t = 0 and the summary
+    // 1 ns after T: readers in time order (rosbag::View, rosbag play) meet them first and last
+    // rather than tied with the states at t = 0 and T.
+    b.bag->write(kRunInfoTopic, open->info.header.stamp - ros::Duration(0, 1), open->info);
+  } else if (auto* state = std::get_if<GearState>(&item.what)) {
+    open_.at(item.id).bag->write(kStateTopic, state->header.stamp, *state);
+  } else if (auto* close = std::get_if<Close>(&item.what)) {
+    OpenBag& b = open_.at(item.id);
+    b.bag->write(kSummaryTopic, close->summary.header.stamp + ros::Duration(0, 1), close->summary);
+    b.bag->close();
+    fs::rename(active_path(folder_, b.name), bag_path(folder_, b.name));
+    open_.erase(item.id);
+    ++written_;
+  } else {  // Abandon: close what was written, keep it .active
+    auto it = open_.find(item.id);
+    if (it == open_.end()) return;
+    it->second.bag->close();
+    open_.erase(it);
+  }
+}
+
+void BagSink::finish() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    done_ = true;
+    not_empty_.notify_all();
+  }
+  if (thread_.joinable()) thread_.join();
+  if (error_) std::rethrow_exception(error_);
+}
+
+}  // namespace gear_dynamics
