@@ -19,7 +19,7 @@ GD_PACKAGES=(
   libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
   librosbag-dev python3-rosbag librostest-dev python3-rostest python3-rostopic python3-rosservice
   python3-rosnode python3-rosparam rosbash rosout
-  libdiagnostic-updater-dev libdiagnostic-msgs-dev libstd-srvs-dev ros-std-srvs python3-std-srvs
+  libdiagnostic-updater-dev libdiagnostic-msgs-dev python3-diagnostic-msgs libstd-srvs-dev ros-std-srvs python3-std-srvs
   libros-rosgraph-msgs-dev
   libeigen3-dev librandom123-dev libtbb-dev libyaml-cpp-dev libgtest-dev libbenchmark-dev libboost-dev
   python3-matplotlib python3-numpy

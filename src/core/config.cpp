@@ -102,7 +102,7 @@ const std::vector<Section>& schema() {
       {"load",
        {GD_REAL("initial_mean", -1e4, 1e4, false, false, "m/s^2", load.initial_mean),
         GD_REAL("initial_sd", 0, 1e4, false, false, "m/s^2", load.initial_sd),
-        GD_REAL("drift", -1e6, 1e6, false, false, "m/s^3", load.drift),
+        GD_REAL("drift", -kMaxLoadDrift, kMaxLoadDrift, false, false, "m/s^3", load.drift),
         GD_REAL("sigma", 0, kMaxLoadSigma, false, false, "m/s^2/sqrt(s)", load.sigma)}},
       {"run",
        {GD_REAL("time_step", 0, 1e-4, true, false, "s", run.time_step),

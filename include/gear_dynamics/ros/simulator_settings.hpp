@@ -1,0 +1,41 @@
+// The section `simulator` (config/simulator.yaml): how the live node gear_simulator runs one
+// realization. Parsed from YAML without ROS, so the validator is unit-tested without a master.
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <cstdint>
+
+namespace gear_dynamics {
+
+// Limits shared by the validator and config/Simulator.cfg (test_simulator_settings keeps them equal).
+constexpr double kMaxRealTimeFactor = 1000.0;
+// Requests are applied at publish instants; below 1 Hz one publish period takes about a wall
+// second to integrate and the node would answer that slowly.
+constexpr double kMinPublishRate = 1.0;     // [Hz]
+constexpr double kMaxPublishRate = 1.0e6;   // [Hz], and at most one message per grid step
+
+struct SimulatorSettings {
+  bool deterministic = false;     // the deterministic load S1 instead of a stochastic realization
+  std::uint32_t realization = 0;  // random stream of the stochastic load
+  double publish_rate = 1000.0;   // [Hz of simulated time]
+  bool publish_scalars = true;    // the std_msgs/Float64 topics too
+  bool publish_clock = true;      // own /clock
+  double real_time_factor = 1.0;  // simulated s per wall s; 0 = as fast as possible
+  double t_end = 0.4;             // [s]; 0 = run on forever
+  bool loop = false;              // start over at t_end instead of stopping
+  bool paused = false;            // start paused
+};
+
+// Validates root["simulator"] for the model's time step h (t_end on the grid, publish_rate at
+// most one message per step). Throws ConfigError listing every problem with key, value and range;
+// unknown keys are errors.
+SimulatorSettings parse_simulator_settings(const YAML::Node& root, double time_step);
+
+// The settings as the section `simulator` (for run_info).
+YAML::Node to_yaml(const SimulatorSettings& settings);
+
+// Grid steps per publish period: 1/(rate h) rounded, at least 1 (the same rule as gear_run --rate).
+std::int64_t publish_period_steps(double publish_rate, double time_step);
+
+}  // namespace gear_dynamics

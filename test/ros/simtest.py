@@ -1,0 +1,90 @@
+"""Helpers shared by the gear_simulator rostests. Timeouts are in wall seconds: simulated time
+stands still while the node is paused."""
+import csv
+import threading
+import time
+
+import rospy
+from std_srvs.srv import Empty, Trigger
+
+CLOCK_OFFSET = 1.0  # kClockOffset in gear_dynamics/ros/conversions.hpp [s]
+
+
+class Collector:
+    """Every message of one topic, in arrival order."""
+
+    def __init__(self, topic, msg_type):
+        self._cond = threading.Condition()
+        self._msgs = []
+        self.sub = rospy.Subscriber(topic, msg_type, self._received, queue_size=None)
+
+    def _received(self, msg):
+        with self._cond:
+            self._msgs.append(msg)
+            self._cond.notify_all()
+
+    def messages(self):
+        with self._cond:
+            return list(self._msgs)
+
+    def clear(self):
+        with self._cond:
+            self._msgs = []
+
+    def wait_for(self, predicate, timeout, what):
+        """Waits until predicate(messages) holds; returns the messages."""
+        deadline = time.time() + timeout
+        with self._cond:
+            while not predicate(self._msgs):
+                left = deadline - time.time()
+                if left <= 0:
+                    raise AssertionError('timed out after %g s waiting for %s on %s (%d messages)'
+                                         % (timeout, what, self.sub.name, len(self._msgs)))
+                self._cond.wait(left)
+            return list(self._msgs)
+
+    def wait_connected(self, timeout=20.0):
+        wait_until(lambda: self.sub.get_num_connections() > 0, timeout,
+                   'a publisher of ' + self.sub.name)
+
+
+def wait_until(predicate, timeout, what):
+    deadline = time.time() + timeout
+    while not predicate():
+        if time.time() > deadline:
+            raise AssertionError('timed out after %g s waiting for %s' % (timeout, what))
+        time.sleep(0.01)
+
+
+def services(node):
+    """The node's ~pause, ~unpause, ~reset (std_srvs/Empty) and ~step (std_srvs/Trigger)."""
+    proxies = {}
+    for name, srv in (('pause', Empty), ('unpause', Empty), ('reset', Empty), ('step', Trigger)):
+        rospy.wait_for_service(node + '/' + name, timeout=20.0)
+        proxies[name] = rospy.ServiceProxy(node + '/' + name, srv)
+    return proxies
+
+
+def last_run(msgs):
+    """The messages from the last one at t = 0 on (a run starts again at every reset)."""
+    starts = [i for i, m in enumerate(msgs) if m.t == 0.0]
+    assert starts, 'no state at t = 0'
+    return msgs[starts[-1]:]
+
+
+def ends_at(t_end, time_step=1e-6):
+    """Whether the state at grid time t_end has arrived (t is step index times h, not t_end)."""
+    end = round(t_end / time_step)
+    return lambda msgs: any(round(m.t / time_step) == end for m in msgs)
+
+
+def values(m):
+    """A GearState's content without header.seq (which counts messages)."""
+    return (m.header.stamp, m.t, m.delta, m.delta_dot, m.phi, m.center_distance, m.mesh_stiffness,
+            m.mesh_phase, m.mu, m.sigma, m.realization, m.seed)
+
+
+def read_csv(path):
+    """Rows of a CSV with a header line; numbers as Python floats (17 digits round-trip doubles)."""
+    with open(path) as f:
+        return list(csv.DictReader(f))

@@ -1,0 +1,120 @@
+// The simulator's settings: the shipped file loads, each kind of bad input is refused naming the
+// key, and the dynamic_reconfigure limits (config/Simulator.cfg) equal the validators'.
+#include <gtest/gtest.h>
+
+#include "gear_dynamics/SimulatorConfig.h"
+#include "gear_dynamics/config.hpp"
+#include "gear_dynamics/ros/simulator_settings.hpp"
+
+namespace gd = gear_dynamics;
+
+namespace {
+
+constexpr double kStep = 1e-6;
+
+YAML::Node shipped() { return gd::read_yaml_files({std::string(GEAR_DYNAMICS_CONFIG_DIR) + "/simulator.yaml"}); }
+
+std::string error_with(const std::string& key, const std::string& yaml_value, double time_step = kStep) {
+  YAML::Node root = shipped();
+  if (yaml_value.empty()) {
+    root["simulator"].remove(key);
+  } else {
+    root["simulator"][key] = YAML::Load(yaml_value);
+  }
+  try {
+    gd::parse_simulator_settings(root, time_step);
+    return "";
+  } catch (const gd::ConfigError& e) {
+    return e.what();
+  }
+}
+
+#define EXPECT_HAS(haystack, needle) \
+  EXPECT_NE((haystack).find(needle), std::string::npos) << "message: " << (haystack) << "\nmissing: " << (needle)
+
+}  // namespace
+
+TEST(SimulatorSettings, ShippedFileLoads) {
+  const gd::SimulatorSettings s = gd::parse_simulator_settings(shipped(), kStep);
+  EXPECT_FALSE(s.deterministic);
+  EXPECT_EQ(s.realization, 0u);
+  EXPECT_EQ(s.publish_rate, 1000.0);
+  EXPECT_TRUE(s.publish_clock);
+  EXPECT_EQ(s.real_time_factor, 1.0);
+  EXPECT_EQ(s.t_end, 0.4);
+  EXPECT_FALSE(s.loop);
+  EXPECT_FALSE(s.paused);
+  // to_yaml round-trips.
+  YAML::Node root;
+  root["simulator"] = gd::to_yaml(s);
+  const gd::SimulatorSettings again = gd::parse_simulator_settings(root, kStep);
+  EXPECT_EQ(again.publish_rate, s.publish_rate);
+  EXPECT_EQ(again.t_end, s.t_end);
+  EXPECT_EQ(again.publish_scalars, s.publish_scalars);
+}
+
+TEST(SimulatorSettings, BadValuesNameKeyValueAndRange) {
+  EXPECT_HAS(error_with("publish_rate", ""), "simulator.publish_rate is missing");
+  EXPECT_HAS(error_with("publish_rate", "0"), "simulator.publish_rate = 0 is out of range; allowed [1, 1000000]");
+  EXPECT_HAS(error_with("publish_rate", "2e6"), "simulator.publish_rate = 2000000 is out of range");
+  // At most one message per grid step.
+  EXPECT_HAS(error_with("publish_rate", "60000", 2e-5), "allowed [1, 50000]");
+  EXPECT_HAS(error_with("publish_rate", "fast"), "simulator.publish_rate = fast has the wrong type");
+  EXPECT_HAS(error_with("publish_rate", ".nan"), "is out of range");
+  EXPECT_HAS(error_with("real_time_factor", "-1"), "simulator.real_time_factor = -1 is out of range; allowed [0, 1000]");
+  EXPECT_HAS(error_with("realization", "1.5"), "simulator.realization = 1.5 is not an integer");
+  EXPECT_HAS(error_with("realization", "-1"), "simulator.realization = -1 is out of range");
+  EXPECT_HAS(error_with("t_end", "0.0000015"), "simulator.t_end = 1.5e-06 s is not a whole number of time steps");
+  EXPECT_HAS(error_with("loop", "1"), "simulator.loop = 1 has the wrong type: expected true or false");
+  EXPECT_EQ(error_with("paused", "true"), "");
+  EXPECT_HAS(error_with("publish_clock", "[true]"), "simulator.publish_clock = [true] has the wrong type");
+  EXPECT_EQ(error_with("deterministic", "yes"), "");  // YAML's other spellings of true
+}
+
+TEST(SimulatorSettings, ContradictionsAndTypos) {
+  YAML::Node root = shipped();
+  root["simulator"]["t_end"] = 0.0;
+  root["simulator"]["loop"] = true;
+  try {
+    gd::parse_simulator_settings(root, kStep);
+    FAIL() << "loop without t_end accepted";
+  } catch (const gd::ConfigError& e) {
+    EXPECT_HAS(std::string(e.what()), "simulator.loop = true needs simulator.t_end > 0");
+  }
+  EXPECT_HAS(error_with("publish_rat", "100"), "simulator.publish_rat is not a known key (a typo?); valid keys:");
+  EXPECT_HAS(error_with("publish_rat", "100"), "publish_rate");
+  // Several problems are all reported.
+  root = shipped();
+  root["simulator"]["t_end"] = -1.0;
+  root["simulator"]["real_time_factor"] = "x";
+  try {
+    gd::parse_simulator_settings(root, kStep);
+    FAIL() << "bad settings accepted";
+  } catch (const gd::ConfigError& e) {
+    EXPECT_HAS(std::string(e.what()), "simulator.t_end = -1");
+    EXPECT_HAS(std::string(e.what()), "simulator.real_time_factor = x");
+  }
+  EXPECT_THROW(gd::parse_simulator_settings(YAML::Load("{gear_pair: {}}"), kStep), gd::ConfigError);
+}
+
+TEST(SimulatorSettings, PublishPeriodRoundsToWholeSteps) {
+  EXPECT_EQ(gd::publish_period_steps(1000.0, 1e-6), 1000);
+  EXPECT_EQ(gd::publish_period_steps(10000.0, 1e-6), 100);
+  EXPECT_EQ(gd::publish_period_steps(3000.0, 1e-6), 333);
+  EXPECT_EQ(gd::publish_period_steps(1e6, 2e-5), 1);
+}
+
+TEST(SimulatorSettings, ReconfigureLimitsEqualTheValidators) {
+  const gear_dynamics::SimulatorConfig lo = gear_dynamics::SimulatorConfig::__getMin__();
+  const gear_dynamics::SimulatorConfig hi = gear_dynamics::SimulatorConfig::__getMax__();
+  EXPECT_EQ(lo.mu, 0.0);
+  EXPECT_EQ(hi.mu, gd::kMaxFrictionCoefficient);
+  EXPECT_EQ(lo.sigma, 0.0);
+  EXPECT_EQ(hi.sigma, gd::kMaxLoadSigma);
+  EXPECT_EQ(lo.lambda, -gd::kMaxLoadDrift);
+  EXPECT_EQ(hi.lambda, gd::kMaxLoadDrift);
+  EXPECT_EQ(lo.real_time_factor, 0.0);
+  EXPECT_EQ(hi.real_time_factor, gd::kMaxRealTimeFactor);
+  EXPECT_EQ(lo.publish_rate, gd::kMinPublishRate);
+  EXPECT_EQ(hi.publish_rate, gd::kMaxPublishRate);
+}
