@@ -1,0 +1,224 @@
+#!/usr/bin/python3
+"""End to end: a small Monte Carlo batch, then gear_aggregator. Every statistic of the latched
+BatchReport is computed again here, independently (numpy, scipy, the Python rosbag API), from the
+same bags; then a run bag is replayed with `rosbag play` and the played GearState messages are
+compared with the bag's contents.
+
+Parameters (private): folder (the batch folder), analysis_files (YAML files the aggregator
+loaded, in order), report_timeout [s].
+"""
+import glob
+import io
+import math
+import os
+import shutil
+import subprocess
+import sys
+import threading
+import time
+import unittest
+
+import numpy as np
+import rosbag
+import rospy
+import rostest
+import rostopic
+import yaml
+from scipy import stats
+
+from gear_dynamics.msg import BatchReport, GearState
+
+# Quantiles are interpolated with a different but equivalent formula in numpy (a + t (b - a) for
+# t < 1/2, b - (1 - t) (b - a) otherwise), and scipy sums ranks in another order: both agree with
+# the C++ to a few ulps, far below any meaningful digit.
+REL = 1e-12
+
+
+def close(a, b, rel=REL):
+    if math.isnan(a) and math.isnan(b):
+        return True
+    return abs(a - b) <= rel * max(1.0, abs(a), abs(b))
+
+
+def read_runs(folder):
+    """RunInfo and RunSummary of every finished bag of the folder."""
+    runs = []
+    for path in sorted(glob.glob(os.path.join(folder, "*.bag"))):
+        with rosbag.Bag(path) as bag:
+            info = [m for _, m, _ in bag.read_messages(topics=["/gear/run_info"])]
+            summary = [m for _, m, _ in bag.read_messages(topics=["/gear/summary"])]
+        runs.append((path, info[0], summary[0]))
+    return runs
+
+
+def serialized(msg):
+    buf = io.BytesIO()
+    msg.serialize(buf)
+    return buf.getvalue()
+
+
+def load_analysis(files):
+    settings = {}
+    for f in files:
+        with open(f) as stream:
+            settings.update(yaml.safe_load(stream)["analysis"])
+    return settings
+
+
+class AggregatorEndToEnd(unittest.TestCase):
+    report = None
+
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node("test_aggregator")
+        cls.folder = rospy.get_param("~folder")
+        cls.analysis = load_analysis(rospy.get_param("~analysis_files"))
+        timeout = rospy.get_param("~report_timeout", 90.0)
+        cls.report = rospy.wait_for_message("/gear_aggregator/report", BatchReport, timeout=timeout)
+        cls.runs = read_runs(cls.folder)
+
+    @classmethod
+    def tearDownClass(cls):
+        shutil.rmtree(rospy.get_param("~folder"), ignore_errors=True)
+
+    def box(self, msg, values, what):
+        x = np.sort(np.asarray(values, dtype=float))
+        n = len(x)
+        self.assertEqual(msg.n, n, what)
+        for got, p, name in ((msg.min, 0, "min"), (msg.q1, 0.25, "q1"), (msg.median, 0.5, "median"),
+                             (msg.q3, 0.75, "q3"), (msg.max, 1, "max")):
+            self.assertTrue(close(got, float(np.quantile(x, p))), "%s %s: %r vs numpy %r" % (what, name, got, np.quantile(x, p)))
+        # Exact median interval: the largest l with P(l <= B <= n - l) >= confidence, B ~ Bin(n, 1/2).
+        conf = self.report.confidence
+        ls = [l for l in range(1, (n + 1) // 2 + 1) if stats.binom.cdf(n - l, n, 0.5) - stats.binom.cdf(l - 1, n, 0.5) >= conf]
+        l = max(ls) if ls else 1
+        self.assertEqual(msg.median_low, x[l - 1], what)
+        self.assertEqual(msg.median_high, x[n - l], what)
+
+    def proportion(self, msg, successes, trials, what):
+        self.assertEqual((msg.successes, msg.trials), (successes, trials), what)
+        if trials == 0:
+            self.assertTrue(math.isnan(msg.estimate))
+            return
+        ci = stats.binomtest(successes, trials).proportion_ci(confidence_level=self.report.confidence, method="wilson")
+        self.assertTrue(close(msg.low, ci.low, 1e-9) and close(msg.high, ci.high, 1e-9),
+                        "%s: [%r, %r] vs scipy [%r, %r]" % (what, msg.low, msg.high, ci.low, ci.high))
+
+    def test_1_every_statistic_equals_an_independent_computation(self):
+        r, a = self.report, self.analysis
+        self.assertEqual(r.runs_used, len(self.runs))
+        self.assertEqual(r.runs_expected, len(self.runs))
+        self.assertEqual(list(r.skipped_files), [])
+        self.assertEqual(list(r.missing_runs), [])
+        self.assertEqual(list(r.delta_interval), a["delta_interval"])
+        mus = sorted({s.mu for _, _, s in self.runs})
+        self.assertEqual([f.mu for f in r.friction], mus)
+        d_by_mu = []
+        for f in r.friction:
+            mine = [s for _, _, s in self.runs if s.mu == f.mu]
+            s1 = [s for s in mine if s.kind == "S1"]
+            phase = [s for s in mine if s.kind == "phase"]
+            sto = sorted((s for s in mine if s.kind == "stochastic"), key=lambda s: s.realization)
+            self.assertEqual((len(s1), f.phase_runs, f.stochastic_runs), (1, len(phase), len(sto)))
+            self.assertGreater(len(phase), 0)
+            s1 = s1[0]
+            d = [s.center_distance for s in sto]
+            d_by_mu.append(d)
+            what = "mu = %g" % f.mu
+            self.box(f.center_distance, d, what + " d")
+            self.box(f.steady_state_time, [s.steady_state_time for s in sto], what + " t_ss")
+            self.box(f.steady_state_time_fine, [s.steady_state_time_fine for s in sto], what + " t_ss fine")
+            self.box(f.final_delta, [s.final_delta for s in sto], what + " delta(T)")
+            self.box(f.final_delta_dot, [s.final_delta_dot for s in sto], what + " delta_dot(T)")
+            self.box(f.phase_center_distance, [s.center_distance for s in phase], what + " phase d")
+            self.box(f.phase_final_delta, [s.final_delta for s in phase], what + " phase delta(T)")
+            # Table 3 and Fig. 8.
+            self.assertEqual((f.s1_center_distance, f.s1_final_delta, f.s1_final_delta_dot),
+                             (s1.center_distance, s1.final_delta, s1.final_delta_dot))
+            self.assertEqual((f.s2_center_distance, f.s3_center_distance), (d[0], d[1]))
+            # Probabilities.
+            n = len(d)
+            self.proportion(f.d_exceeds_s1, sum(x > s1.center_distance for x in d), n, what + " d > d_S1")
+            med = float(np.median([s.center_distance for s in phase]))
+            self.proportion(f.d_exceeds_phase_median, sum(x > med for x in d), n, what + " d > phase median")
+            self.proportion(f.reached_steady_state, sum(s.reached_steady_state for s in sto), n, what + " t_ss < T")
+            lo, hi = a["delta_interval"]
+            self.proportion(f.delta_in_interval, sum(lo <= s.final_delta <= hi for s in sto), n, what + " Table 4 delta")
+            lo, hi = a["delta_dot_interval"]
+            self.proportion(f.delta_dot_in_interval, sum(lo <= s.final_delta_dot <= hi for s in sto), n,
+                            what + " Table 4 delta_dot")
+            # Histograms (numpy's rule, edges like numpy.linspace).
+            for msg, key, values in ((f.delta_pdf, "delta_bins", [s.final_delta for s in sto]),
+                                     (f.delta_dot_pdf, "delta_dot_bins", [s.final_delta_dot for s in sto])):
+                b0, b1, w = a[key]
+                edges = np.linspace(b0, b1, int(round((b1 - b0) / w)) + 1)
+                counts, _ = np.histogram(values, bins=edges)
+                self.assertEqual(list(msg.edges), list(edges), key)
+                self.assertEqual(list(msg.counts), list(counts), key)
+                self.assertEqual(msg.outside, n - counts.sum(), key)
+                self.assertTrue(np.allclose(msg.density, counts / (n * np.diff(edges)), rtol=REL, atol=0), key)
+            self.assertEqual(len(f.joint_pdf), len(a["joint_times"]))
+            for msg, t in zip(f.joint_pdf, a["joint_times"]):
+                k = [i for i, st in enumerate(sto[0].snapshot_times) if abs(st - t) < 1e-9][0]
+                x = [s.snapshot_delta[k] for s in sto]
+                y = [s.snapshot_delta_dot[k] for s in sto]
+                xe = np.linspace(a["joint_delta_bins"][0], a["joint_delta_bins"][1],
+                                 int(round((a["joint_delta_bins"][1] - a["joint_delta_bins"][0]) / a["joint_delta_bins"][2])) + 1)
+                ye = np.linspace(a["joint_delta_dot_bins"][0], a["joint_delta_dot_bins"][1],
+                                 int(round((a["joint_delta_dot_bins"][1] - a["joint_delta_dot_bins"][0]) / a["joint_delta_dot_bins"][2])) + 1)
+                h, _, _ = np.histogram2d(x, y, bins=[xe, ye])
+                self.assertEqual(msg.time, t)
+                self.assertEqual(list(msg.counts), [int(c) for c in h.flatten()], "joint at %g s" % t)
+                self.assertEqual(msg.outside, n - int(h.sum()))
+                self.assertGreater(int(h.sum()), 0, "the test's joint bins should hold some realizations")
+        # Tests across mu.
+        kw = stats.kruskal(*d_by_mu)
+        self.assertTrue(close(r.kruskal_wallis.statistic, kw.statistic, 1e-9) and close(r.kruskal_wallis.p_value, kw.pvalue, 1e-9))
+        fr = stats.friedmanchisquare(*d_by_mu) if len(d_by_mu) > 2 else None
+        if fr is None:  # scipy needs 3 treatments; with 2 the statistic is the sign test's
+            plus = sum(b > a_ for a_, b in zip(*d_by_mu))
+            ties = sum(b == a_ for a_, b in zip(*d_by_mu))
+            m = len(d_by_mu[0]) - ties
+            q = (2 * plus - m) ** 2 / m
+            self.assertTrue(close(r.friedman.statistic, q, 1e-9), "%r vs %r" % (r.friedman.statistic, q))
+            self.assertTrue(close(r.friedman.p_value, stats.chi2.sf(q, 1), 1e-9))
+        else:
+            self.assertTrue(close(r.friedman.statistic, fr.statistic, 1e-9))
+        # The report folder.
+        for name in ("report.md", "box_stats.csv", "probabilities.csv", "table3.csv", "pdf_delta.csv", "joint_pdf.csv",
+                     "series.csv", "fig09_boxplot.png", "fig10_joint_pdf.png", "fig11_pdf_delta.png"):
+            self.assertTrue(os.path.isfile(os.path.join(r.report_folder, name)), name)
+
+    def test_2_rosbag_play_publishes_the_bags_gear_states(self):
+        path = [p for p, info, _ in self.runs if info.kind == "stochastic" and info.realization == 0][0]
+        with rosbag.Bag(path) as bag:
+            expected = [m for _, m, _ in bag.read_messages(topics=["/gear/state"])]
+        self.assertGreater(len(expected), 10)
+        received, lock = [], threading.Lock()
+
+        def on_state(msg):
+            with lock:
+                received.append(msg)
+
+        sub = rospy.Subscriber("/gear/state", GearState, on_state, queue_size=len(expected) + 10)
+        # -d: pause after advertising so that the subscription is connected before the first message.
+        subprocess.run(["rosbag", "play", "-q", "-d", "1", "--topics", "/gear/state", "--", path], check=True,
+                       stdout=subprocess.DEVNULL, timeout=60)
+        deadline = time.time() + 10
+        while time.time() < deadline:
+            with lock:
+                if len(received) >= len(expected):
+                    break
+            time.sleep(0.05)
+        sub.unregister()
+        self.assertEqual(len(received), len(expected))
+        # The bag reader builds its own classes from the bag's definitions: compare the bytes.
+        for got, want in zip(received, expected):
+            self.assertEqual(serialized(got), serialized(want))
+        # The field paths that `rostopic echo /gear/state/delta` and rqt_plot use.
+        for field in ("delta", "delta_dot", "phi", "center_distance"):
+            self.assertEqual(rostopic.msgevalgen("/" + field)(received[-1]), getattr(expected[-1], field))
+
+
+if __name__ == "__main__":
+    rostest.rosrun("gear_dynamics", "test_aggregator", AggregatorEndToEnd, sys.argv)
