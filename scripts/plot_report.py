@@ -16,6 +16,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.ticker import MaxNLocator  # noqa: E402
 
 
 def read(folder, name):
@@ -80,6 +81,8 @@ def series_figures(folder, mu, out):
     for ax, n in zip(axes[0], names):
         w = [r for r in runs[n] if lo <= float(r["t[s]"]) <= hi]
         ax.plot(col(w, "delta[mm]"), col(w, "delta_dot[mm/s]"), lw=0.4)
+        ax.xaxis.set_major_locator(MaxNLocator(4))
+        ax.ticklabel_format(axis="x", useOffset=False)
         ax.set_xlabel("δ [mm]")
         ax.set_title(n, fontsize=9)
     axes[0, 0].set_ylabel(r"$\dot{\delta}$ [mm/s]")

@@ -1,10 +1,20 @@
 #!/usr/bin/env bash
-# The README's main command: installs what is missing, builds, and runs the main job with the
-# defaults in config/.
+# The README's main command: installs what is missing, builds, and reproduces the paper's §3:
+# the default Monte Carlo batch, then the aggregator's report (launch/paper.launch).
+#   GD_OUTPUT  batch folder (default: batches/paper in the repository); re-running resumes it
+#   GD_REPORT  report folder (default: report/ in the repository)
+# Extra arguments go to roslaunch, e.g. realizations:=1000.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/setup.sh"
 
-out=${GD_OUTPUT:-$GD_REPO/report}
-mkdir -p "$out"
-rosrun gear_dynamics gear_run --output "$out/gear_run.csv" "$@"
-echo "series written to $out/gear_run.csv"
+batch=${GD_OUTPUT:-$GD_REPO/batches/paper}
+report=${GD_REPORT:-$GD_REPO/report}
+mkdir -p "$batch" "$report"
+# A master of our own on a free port: never another user's roscore (and its node names).
+port=$(/usr/bin/python3 -c 'import socket; s = socket.socket(); s.bind(("", 0)); print(s.getsockname()[1])')
+export ROS_MASTER_URI=http://localhost:$port
+rm -f "$report/report.md"
+start=$(date +%s)
+roslaunch -p "$port" gear_dynamics paper.launch output_dir:="$batch" report_folder:="$report" "$@"
+[ -f "$report/report.md" ] || { echo "reproduce: no report was written (see the log above)" >&2; exit 1; }
+echo "reproduce: report $report/report.md, figures $report/fig*.png ($(( $(date +%s) - start )) s)"

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "gear_dynamics/batch.hpp"
 #include "gear_dynamics/config.hpp"
 
 namespace gear_dynamics {
@@ -158,9 +159,9 @@ MuAnalysis analyse_mu(double mu, const std::vector<const RunRecord*>& runs, cons
 
 const char* to_string(RunKind kind) {
   switch (kind) {
-    case RunKind::S1: return "S1";
-    case RunKind::Phase: return "phase";
-    case RunKind::Stochastic: return "stochastic";
+    case RunKind::S1: return kKindS1;
+    case RunKind::Phase: return kKindPhase;
+    case RunKind::Stochastic: return kKindStochastic;
   }
   return "?";
 }
