@@ -22,7 +22,7 @@ GD_PACKAGES=(
   libdiagnostic-updater-dev libdiagnostic-msgs-dev python3-diagnostic-msgs libstd-srvs-dev ros-std-srvs python3-std-srvs
   libros-rosgraph-msgs-dev
   libeigen3-dev librandom123-dev libtbb-dev libyaml-cpp-dev libgtest-dev libbenchmark-dev libboost-dev
-  python3-matplotlib python3-numpy
+  python3-matplotlib python3-numpy python3-scipy
 )
 
 gd_install() {

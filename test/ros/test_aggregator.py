@@ -2,7 +2,8 @@
 """End to end: a small Monte Carlo batch, then gear_aggregator. Every statistic of the latched
 BatchReport is computed again here, independently (numpy, scipy, the Python rosbag API), from the
 same bags; then a run bag is replayed with `rosbag play` and the played GearState messages are
-compared with the bag's contents.
+compared with the bag's contents; last, the node is run on unusable folders and must exit with an
+error naming the folder.
 
 Parameters (private): folder (the batch folder), analysis_files (YAML files the aggregator
 loaded, in order), report_timeout [s].
@@ -14,12 +15,14 @@ import os
 import shutil
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 import unittest
 
 import numpy as np
 import rosbag
+import rosparam
 import rospy
 import rostest
 import rostopic
@@ -219,6 +222,24 @@ class AggregatorEndToEnd(unittest.TestCase):
         # The field paths that `rostopic echo /gear/state/delta` and rqt_plot use.
         for field in ("delta", "delta_dot", "phi", "center_distance"):
             self.assertEqual(rostopic.msgevalgen("/" + field)(received[-1]), getattr(expected[-1], field))
+
+    def test_3_a_folder_without_usable_bags_is_an_error_not_a_crash(self):
+        name = "/aggregator_bad_input"
+        rosparam.upload_params(name, {"analysis": self.analysis})
+        with tempfile.TemporaryDirectory() as empty, tempfile.TemporaryDirectory() as broken:
+            # A manifest whose only bag is truncated.
+            shutil.copy(os.path.join(self.folder, "manifest.yaml"), broken)
+            with open(self.runs[0][0], "rb") as f:
+                head = f.read(300)
+            with open(os.path.join(broken, os.path.basename(self.runs[0][0])), "wb") as f:
+                f.write(head)
+            for folder, message in ((empty, "has no manifest.yaml"), (broken, "has no usable bag")):
+                run = subprocess.run(["rosrun", "gear_dynamics", "gear_aggregator", "__name:=" + name[1:],
+                                      "_folders:=" + folder, "_exit_when_done:=true"],
+                                     capture_output=True, text=True, timeout=60)
+                self.assertEqual(run.returncode, 1, run.stdout + run.stderr)
+                self.assertIn(message, run.stdout + run.stderr)
+                self.assertIn(folder, run.stdout + run.stderr)
 
 
 if __name__ == "__main__":
