@@ -1,0 +1,134 @@
+#!/usr/bin/python3
+"""Runs the four implementations on one workload, cross-checks them and prints the table.
+Called by bench/run (which builds gear_bench first); see bench/run --help."""
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+# Fields of the implementations' JSON that are arrays (Octave writes a 1-element one as a number).
+ARRAYS = ("seconds", "delta", "velocity", "check_delta", "check_velocity")
+
+
+def measure(command, work):
+    """Runs command; returns its peak resident memory [MiB]. GNU time forks it from a small
+    process: a child spawned from this Python would inherit Python's high-water mark."""
+    rss = os.path.join(work, "rss")
+    if subprocess.run(["/usr/bin/time", "-f", "%M", "-o", rss] + command).returncode != 0:
+        sys.exit(f"bench: {' '.join(command)} failed")
+    return int(open(rss).read().split()[-1]) / 1024.0  # KiB
+
+
+def sd_standard_error(x):
+    """Standard error of the sample sd without assuming normality: Var(s^2) ~ (m4 - s^4) / n."""
+    m2, m4 = np.mean((x - x.mean()) ** 2), np.mean((x - x.mean()) ** 4)
+    return np.sqrt(max(m4 - m2 * m2, 0.0) / len(x)) / (2.0 * np.sqrt(m2))
+
+
+def agree_in_distribution(a, b, z=4.0):
+    """Means and sds of a and b agree within z combined standard errors."""
+    se_mean = np.hypot(a.std(ddof=1) / np.sqrt(len(a)), b.std(ddof=1) / np.sqrt(len(b)))
+    se_sd = np.hypot(sd_standard_error(a), sd_standard_error(b))
+    return (abs(a.mean() - b.mean()) <= z * se_mean and
+            abs(a.std(ddof=1) - b.std(ddof=1)) <= z * se_sd)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("gear_bench", help="path of the built gear_bench")
+    parser.add_argument("--realizations", type=int, default=64)
+    parser.add_argument("--duration", type=float, default=0.05, help="simulated time [s]")
+    parser.add_argument("--check-duration", type=float, default=0.02,
+                        help="deterministic run compared path by path [s]; keep it well before "
+                             "the chaotic separation (~0.1 s)")
+    parser.add_argument("--block", type=int, default=16, help="lanes per engine block")
+    parser.add_argument("--skip-octave", action="store_true")
+    args = parser.parse_args()
+
+    with tempfile.TemporaryDirectory(prefix="gear_bench.") as work:
+        results = run_all(args, work)
+    report(args, results)
+
+
+def run_all(args, work):
+    params = os.path.join(work, "params.json")
+    measure([args.gear_bench, "params", "--output", params], work)
+    workload = ["--realizations", str(args.realizations), "--duration", str(args.duration),
+                "--check-duration", str(args.check_duration), "--check-every", "0.001"]
+    engine = [args.gear_bench, "engine", "--block", str(args.block)] + workload
+    # (label, threads, repetitions, command(output, repetitions)); the best repetition counts.
+    runs = [("engine (Ensemble, SIMD lanes)", 2, 5,
+             lambda out, k: engine + ["--threads", "2", "--repeat", str(k), "--output", out]),
+            ("engine (Ensemble, SIMD lanes)", 1, 5,
+             lambda out, k: engine + ["--threads", "1", "--repeat", str(k), "--output", out]),
+            ("plain scalar C++ loop", 1, 3,
+             lambda out, k: [args.gear_bench, "scalar", "--repeat", str(k), "--output", out] + workload),
+            ("numpy, vectorised", 1, 2,
+             lambda out, k: [os.path.join(HERE, "gear_numpy.py"), params, out, "--repeat", str(k)]
+             + workload)]
+    if not args.skip_octave:
+        runs.append(("Octave, vectorised", 1, 1, lambda out, k: [
+            "octave-cli", "--norc", "--no-history", "--quiet", "--path", HERE, "--eval",
+            f"gear_octave('{params}', '{out}', {args.realizations}, {args.duration}, "
+            f"{args.check_duration}, 0.001, {k})"]))
+
+    results = []
+    for label, threads, repeat, command in runs:
+        out = os.path.join(work, f"{len(results)}.json")
+        print(f"bench: {label}, {threads} thread(s), {repeat} run(s) ...", file=sys.stderr, flush=True)
+        rss = measure(command(out, repeat), work)
+        data = {k: np.atleast_1d(np.asarray(v, dtype=float)) if k in ARRAYS else v
+                for k, v in json.load(open(out)).items()}
+        results.append((label, threads, data, rss))
+    return results
+
+
+def report(args, results):
+    reference = results[0][2]
+    rate_ref = reference["realizations"] * reference["steps"] / reference["seconds"].min()
+    load = os.getloadavg()
+    print(f"\nworkload: {args.realizations} realizations x {args.duration} s = "
+          f"{args.realizations * reference['steps']:.3g} realization-steps of h = 1 us, mu and load "
+          f"from config/; {os.cpu_count()} CPUs, load average {load[0]:.2f} at the end\n")
+    print(f"| {'implementation':32s} | threads | best time [s] (of n) | realization-steps/s "
+          f"| engine(2T) is x faster | peak RSS [MiB] |")
+    print(f"|{'-' * 34}|---------|----------------------|---------------------|"
+          f"------------------------|----------------|")
+    for label, threads, data, rss in results:
+        best = data["seconds"].min()
+        rate = data["realizations"] * data["steps"] / best
+        print(f"| {label:32s} | {threads:7d} | {best:11.3f} ({len(data['seconds'])})"
+              f"{'':5s} | {rate:19.3e} | {rate_ref / rate:22.1f} | {rss:14.1f} |")
+
+    print(f"\ncross-checks against the engine at 2 threads:")
+    ok = True
+    for label, threads, data, _ in results[1:]:
+        checks = []
+        # Deterministic S1, path by path up to --check-duration: relative to the largest value.
+        for key in ("check_delta", "check_velocity"):
+            a, b = reference[key], data[key]
+            err = np.max(np.abs(a - b)) / np.max(np.abs(a)) if a.shape == b.shape else np.inf
+            checks.append((f"S1 {key[6:]} rel. error {err:.1e} <= 1e-9", err <= 1e-9))
+        # End states of the stochastic runs: in distribution (independent RNGs for numpy/Octave).
+        for key in ("delta", "velocity"):
+            a, b = reference[key], data[key]
+            same = a.shape == b.shape and np.array_equal(a, b)
+            checks.append((f"{key}(T) mean/sd within 4 SE" + (" (identical paths)" if same else ""),
+                           agree_in_distribution(a, b)))
+        ok &= all(passed for _, passed in checks)
+        print(f"  {label} ({threads}T): " + "; ".join(
+            f"{text} {'ok' if passed else 'FAILED'}" for text, passed in checks))
+    print(f"\nend state, engine: delta(T) = {1e3 * reference['delta'].mean():.5f} +- "
+          f"{1e3 * reference['delta'].std(ddof=1):.5f} mm, delta_dot(T) = "
+          f"{1e3 * reference['velocity'].mean():.3f} +- {1e3 * reference['velocity'].std(ddof=1):.3f}"
+          f" mm/s (mean +- sd over realizations)")
+    sys.exit(0 if ok else 1)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,211 @@
+// gear_bench: the C++ side of bench/run.
+//   gear_bench params                 the model parameters (JSON) for the numpy and Octave versions
+//   gear_bench engine --threads N ... times the package's engine on the reduced workload
+//   gear_bench scalar ...             times the plain scalar loop (scalar_loop.hpp)
+// Each timing run writes JSON: wall time, end states of the stochastic realizations, and a
+// deterministic run (S1) sampled on a coarse grid for the pathwise cross-check.
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <functional>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "gear_dynamics/config.hpp"
+#include "gear_dynamics/ensemble.hpp"
+#include "params_json.hpp"
+#include "scalar_loop.hpp"
+
+namespace gd = gear_dynamics;
+using gear_bench::ScalarState;
+
+namespace {
+
+const char* kUsage = R"(usage: gear_bench params | engine [options] | scalar [options]
+  --realizations R     stochastic realizations 0..R-1 (default 64)
+  --duration T         simulated time [s] (default 0.05)
+  --check-duration T   deterministic run S1 for the pathwise check [s] (default 0.02)
+  --check-every T      its sampling interval [s] (default 0.001)
+  --threads N          engine threads (default 1)
+  --block L            lanes per engine block (default 16)
+  --repeat K           timed repetitions; the JSON reports each (default 3)
+  --output FILE        JSON output (default: stdout)
+The model is the package's default configuration (config/*.yaml).
+)";
+
+struct Options {
+  std::string mode;
+  int realizations = 64;
+  double duration = 0.05, check_duration = 0.02, check_every = 0.001;
+  int threads = 1, block = 16, repeat = 3;
+  std::string output = "-";
+};
+
+Options parse(int argc, char** argv) {
+  if (argc < 2) throw std::runtime_error(kUsage);
+  Options o;
+  o.mode = argv[1];
+  for (int i = 2; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw std::runtime_error("option " + a + " needs a value");
+      return argv[++i];
+    };
+    if (a == "--realizations") o.realizations = std::stoi(value());
+    else if (a == "--duration") o.duration = std::stod(value());
+    else if (a == "--check-duration") o.check_duration = std::stod(value());
+    else if (a == "--check-every") o.check_every = std::stod(value());
+    else if (a == "--threads") o.threads = std::stoi(value());
+    else if (a == "--block") o.block = std::stoi(value());
+    else if (a == "--repeat") o.repeat = std::stoi(value());
+    else if (a == "--output") o.output = value();
+    else throw std::runtime_error("unknown option '" + a + "'\n" + kUsage);
+  }
+  if (o.mode != "params" && o.mode != "engine" && o.mode != "scalar")
+    throw std::runtime_error("unknown mode '" + o.mode + "'\n" + kUsage);
+  if (o.realizations < 1) throw std::runtime_error("--realizations must be >= 1");
+  if (o.threads < 1 || o.block < 1 || o.repeat < 1)
+    throw std::runtime_error("--threads, --block and --repeat must be >= 1");
+  if (!(o.duration > 0) || !(o.check_duration > 0) || !(o.check_every > 0))
+    throw std::runtime_error("--duration, --check-duration and --check-every must be > 0 s");
+  return o;
+}
+
+gd::ModelConfig default_config() {
+  const std::string dir = GEAR_DYNAMICS_CONFIG_DIR;
+  return gd::parse_config(
+      gd::read_yaml_files({dir + "/gear_pair.yaml", dir + "/load.yaml", dir + "/run.yaml"}));
+}
+
+std::string json_array(const std::vector<double>& v) {
+  std::string s = "[";
+  char buf[32];
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    std::snprintf(buf, sizeof buf, "%s%.17g", i ? ", " : "", v[i]);
+    s += buf;
+  }
+  return s + "]";
+}
+
+void write(const std::string& path, const std::string& text) {
+  if (path == "-") {
+    std::cout << text;
+    return;
+  }
+  FILE* f = std::fopen(path.c_str(), "w");
+  if (!f || std::fputs(text.c_str(), f) < 0 || std::fclose(f) != 0)
+    throw std::runtime_error("cannot write '" + path + "'");
+}
+
+// End states of the stochastic realizations and the S1 samples of one implementation.
+struct Outcome {
+  std::vector<double> delta, velocity;
+  std::vector<double> check_delta, check_velocity;
+};
+
+// The package's engine on `threads` threads: blocks of `block` lanes over a TBB arena. This is the
+// one place to swap in the batch runner of issue 4 once it is on main.
+void run_engine(const gd::ModelConfig& c, const Options& o, std::int64_t steps, Outcome& out) {
+  const gd::GearPair g = gd::derive(c.gear);
+  const int blocks = (o.realizations + o.block - 1) / o.block;
+  out.delta.assign(o.realizations, 0.0);
+  out.velocity.assign(o.realizations, 0.0);
+  tbb::task_arena arena(o.threads);
+  arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<int>(0, blocks, 1), [&](const tbb::blocked_range<int>& r) {
+      for (int k = r.begin(); k < r.end(); ++k) {
+        const int first = k * o.block, count = std::min(o.block, o.realizations - first);
+        std::vector<gd::LaneSpec> lanes;
+        for (int i = 0; i < count; ++i)
+          lanes.push_back(gd::stochastic_lane(c, c.friction_coefficient, first + i));
+        gd::Ensemble e(g, c.run.time_step, c.initial, lanes, c.seed);
+        for (std::int64_t n = 0; n < steps; ++n) e.step();
+        for (int i = 0; i < count; ++i) {
+          out.delta[first + i] = e.delta()[i];
+          out.velocity[first + i] = e.velocity()[i];
+        }
+      }
+    });
+  });
+}
+
+void check_engine(const gd::ModelConfig& c, std::int64_t steps, std::int64_t every, Outcome& out) {
+  gd::Ensemble e(gd::derive(c.gear), c.run.time_step, c.initial,
+                 {gd::deterministic_lane(c, c.friction_coefficient)}, c.seed);
+  for (std::int64_t n = 0; n <= steps; ++n) {
+    if (n > 0) e.step();
+    if (n % every == 0) {
+      out.check_delta.push_back(e.delta()[0]);
+      out.check_velocity.push_back(e.velocity()[0]);
+    }
+  }
+}
+
+void run_scalar(const gd::ModelConfig& c, const Options& o, std::int64_t steps, Outcome& out) {
+  const gear_bench::ScalarModel model(gd::derive(c.gear), c.run.time_step);
+  out.delta.clear();
+  out.velocity.clear();
+  for (int r = 0; r < o.realizations; ++r) {
+    const ScalarState s = model.run(gd::stochastic_lane(c, c.friction_coefficient, r), c.seed,
+                                    c.initial.deflection, c.initial.velocity, steps);
+    out.delta.push_back(s.delta);
+    out.velocity.push_back(s.velocity);
+  }
+}
+
+void check_scalar(const gd::ModelConfig& c, std::int64_t steps, std::int64_t every, Outcome& out) {
+  const gear_bench::ScalarModel model(gd::derive(c.gear), c.run.time_step);
+  std::vector<ScalarState> samples;
+  model.run(gd::deterministic_lane(c, c.friction_coefficient), c.seed, c.initial.deflection,
+            c.initial.velocity, steps, every, &samples);
+  for (const ScalarState& s : samples) {
+    out.check_delta.push_back(s.delta);
+    out.check_velocity.push_back(s.velocity);
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+  const Options o = parse(argc, argv);
+  const gd::ModelConfig c = default_config();
+  if (o.mode == "params") {
+    write(o.output, gear_bench::params_json(c));
+    return 0;
+  }
+  const std::int64_t steps = c.run.steps_for(o.duration);
+  const std::int64_t check_steps = c.run.steps_for(o.check_duration);
+  const std::int64_t every = std::max<std::int64_t>(1, c.run.steps_for(o.check_every));
+  const bool engine = o.mode == "engine";
+
+  Outcome out;
+  std::vector<double> seconds;
+  for (int k = 0; k < o.repeat; ++k) {
+    const auto start = std::chrono::steady_clock::now();
+    if (engine) run_engine(c, o, steps, out);
+    else run_scalar(c, o, steps, out);
+    seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  }
+  if (engine) check_engine(c, check_steps, every, out);
+  else check_scalar(c, check_steps, every, out);
+
+  char head[256];
+  std::snprintf(head, sizeof head,
+                "{\n\"realizations\": %d,\n\"steps\": %lld,\n\"threads\": %d,\n\"check_every\": %lld,\n",
+                o.realizations, static_cast<long long>(steps), engine ? o.threads : 1,
+                static_cast<long long>(every));
+  write(o.output, head + ("\"seconds\": " + json_array(seconds) +
+                          ",\n\"delta\": " + json_array(out.delta) +
+                          ",\n\"velocity\": " + json_array(out.velocity) +
+                          ",\n\"check_delta\": " + json_array(out.check_delta) +
+                          ",\n\"check_velocity\": " + json_array(out.check_velocity) + "\n}\n"));
+  return 0;
+} catch (const std::exception& e) {
+  std::fprintf(stderr, "gear_bench: %s\n", e.what());
+  return 1;
+}

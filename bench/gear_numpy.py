@@ -1,0 +1,120 @@
+#!/usr/bin/python3
+"""The gear model (MODEL.md §2) and its integrator (§5: RK4, h = 1 us, stiffness switches split out)
+in vectorised numpy, written as a competent Python user would: one array element per realization,
+a Python loop over time steps, the mesh timing precomputed for all steps at once, normals drawn in
+chunks. Run by bench/run; see --help."""
+import argparse
+import json
+import time
+
+import numpy as np
+
+
+class Gear:
+    def __init__(self, p):
+        self.__dict__.update(p)
+
+    def acceleration(self, d, v, load, K, Q):
+        """Eq. 15: Phi - Q (K g + alpha |g| v), g(d) = d - clamp(d, -b, b), the penetration
+        beyond either flank (np.clip would be 4x slower on arrays this small)."""
+        g = np.maximum(d - self.backlash, 0.0) + np.minimum(d + self.backlash, 0.0)
+        return load - Q * (K * g + self.damping_coefficient * np.abs(g) * v)
+
+    def friction(self, local_phase):
+        return self.c0 + self.c1 * (self.x_b + self.base_radius1 * local_phase)
+
+    def stiffness(self, local_phase):
+        return np.where(local_phase < self.single_pair_angle, self.k1, self.k2)
+
+    def schedule(self, steps):
+        """Per grid step: K and f at the stage times (t_n, midpoint, t_n+1), all measured in the
+        midpoint's mesh cycle, and {n: switch angle} for the steps that hold a switch."""
+        n = np.arange(steps, dtype=float)
+        h, P = self.time_step, self.mesh_period_angle
+        a0 = self.mesh_phase + self.pinion_speed * (n * h)
+        a1 = self.mesh_phase + self.pinion_speed * ((n + 1) * h)
+        mid = 0.5 * (a0 + a1)
+        base = np.floor(mid / P) * P
+        K = self.stiffness(mid - base)
+        f = np.stack([self.friction(a0 - base), self.friction(mid - base), self.friction(a1 - base)])
+        # The next switch after a0; within 1e-9 of a step of a grid point it counts as on it.
+        cycle = np.floor(a0 / P) * P
+        nxt = cycle + np.where(a0 - cycle < self.single_pair_angle, self.single_pair_angle, P)
+        tol = 1e-9 * (a1 - a0)
+        split = np.nonzero((nxt > a0 + tol) & (nxt < a1 - tol))[0]
+        return K, f, {int(i): (a0[i], nxt[i], a1[i]) for i in split}
+
+    def rk4(self, d, v, H, la, lb, K, qa, qm, qb):
+        lm = 0.5 * (la + lb)
+        a1 = self.acceleration(d, v, la, K, qa)
+        v2 = v + 0.5 * H * a1
+        a2 = self.acceleration(d + 0.5 * H * v, v2, lm, K, qm)
+        v3 = v + 0.5 * H * a2
+        a3 = self.acceleration(d + 0.5 * H * v2, v3, lm, K, qm)
+        v4 = v + H * a3
+        a4 = self.acceleration(d + H * v3, v4, lb, K, qb)
+        return (d + H / 6 * (v + 2 * v2 + 2 * v3 + v4),
+                v + H / 6 * (a1 + 2 * a2 + 2 * a3 + a4))
+
+    def run(self, realizations, steps, stochastic=True, every=0, seed=None, chunk=4096):
+        """Integrates `realizations` paths over `steps` grid steps; returns the end (delta, v) and,
+        if every > 0, the samples at steps 0, every, 2 every, ..."""
+        rng = np.random.default_rng(seed)
+        h, mu = self.time_step, self.mu
+        sigma = self.sigma * np.sqrt(h) if stochastic else 0.0
+        d = np.full(realizations, self.initial_deflection)
+        v = np.full(realizations, self.initial_velocity)
+        load = self.load_mean + (self.load_sd * rng.standard_normal(realizations) if stochastic else 0)
+        load = load * np.ones(realizations)
+        K, f, split = self.schedule(steps)
+        coefficients = zip(K.tolist(), *(self.q3 + mu * f).tolist())  # Python floats: faster
+        samples = [(d.copy(), v.copy())] if every else []
+        for n, (K, qa, qm, qb) in enumerate(coefficients):
+            if n % chunk == 0:
+                z = rng.standard_normal((min(chunk, steps - n), realizations))
+            load1 = load + self.drift * h + sigma * z[n % chunk]
+            if n in split:  # two RK4 sub-steps, K and Q frozen at each one's midpoint
+                a0, s, a1 = split[n]
+                ls = load + (s - a0) / (a1 - a0) * (load1 - load)
+                for lo, hi, la, lb in ((a0, s, load, ls), (s, a1, ls, load1)):
+                    m = 0.5 * (lo + hi)
+                    local = m - np.floor(m / self.mesh_period_angle) * self.mesh_period_angle
+                    q = self.q3 + mu * self.friction(local)
+                    d, v = self.rk4(d, v, (hi - lo) / (a1 - a0) * h, la, lb, self.stiffness(local), q, q, q)
+            else:
+                d, v = self.rk4(d, v, h, load, load1, K, qa, qm, qb)
+            load = load1
+            if every and (n + 1) % every == 0:
+                samples.append((d.copy(), v.copy()))
+        return d, v, samples
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("params", help="model parameters: the output of `gear_bench params`")
+    parser.add_argument("output", help="JSON result, the same fields as gear_bench writes")
+    parser.add_argument("--realizations", type=int, default=64, help="0: only the check run")
+    parser.add_argument("--duration", type=float, default=0.05, help="[s]")
+    parser.add_argument("--check-duration", type=float, default=0.02, help="S1 run [s]")
+    parser.add_argument("--check-every", type=float, default=0.001, help="S1 sampling [s]")
+    parser.add_argument("--repeat", type=int, default=1, help="timed repetitions")
+    args = parser.parse_args()
+    params = json.load(open(args.params))
+    gear = Gear(params)
+    steps = round(args.duration / gear.time_step)
+    seconds, d, v = [], np.empty(0), np.empty(0)
+    for _ in range(args.repeat if args.realizations > 0 else 0):
+        start = time.perf_counter()
+        d, v, _ = gear.run(args.realizations, steps, seed=int(params["seed"]))
+        seconds.append(time.perf_counter() - start)
+    every = round(args.check_every / gear.time_step)
+    _, _, samples = gear.run(1, round(args.check_duration / gear.time_step), stochastic=False,
+                             every=every)
+    json.dump({"realizations": args.realizations, "steps": steps, "threads": 1,
+               "check_every": every, "seconds": seconds, "delta": d.tolist(),
+               "velocity": v.tolist(), "check_delta": [float(s[0][0]) for s in samples],
+               "check_velocity": [float(s[1][0]) for s in samples]}, open(args.output, "w"))
+
+
+if __name__ == "__main__":
+    main()
