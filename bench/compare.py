@@ -12,7 +12,7 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 # Fields of the implementations' JSON that are arrays (Octave writes a 1-element one as a number).
-ARRAYS = ("seconds", "delta", "velocity", "check_delta", "check_velocity")
+ARRAYS = ("seconds", "cpu_seconds", "delta", "velocity", "check_delta", "check_velocity")
 
 
 def measure(command, work):
@@ -46,13 +46,15 @@ def main():
     parser.add_argument("--check-duration", type=float, default=0.02,
                         help="deterministic run compared path by path [s]; keep it well before "
                              "the chaotic separation (~0.1 s)")
-    parser.add_argument("--block", type=int, default=16, help="lanes per engine block")
+    parser.add_argument("--block", type=int, default=32,
+                        help="lanes per engine block: 64 realizations make one block per thread")
     parser.add_argument("--skip-octave", action="store_true")
     args = parser.parse_args()
 
+    load = os.getloadavg()[0]
     with tempfile.TemporaryDirectory(prefix="gear_bench.") as work:
         results = run_all(args, work)
-    report(args, results)
+    report(args, results, load)
 
 
 def run_all(args, work):
@@ -62,13 +64,13 @@ def run_all(args, work):
                 "--check-duration", str(args.check_duration), "--check-every", "0.001"]
     engine = [args.gear_bench, "engine", "--block", str(args.block)] + workload
     # (label, threads, repetitions, command(output, repetitions)); the best repetition counts.
-    runs = [("engine (Ensemble, SIMD lanes)", 2, 5,
+    runs = [("engine (run_batch, SIMD lanes)", 2, 20,
              lambda out, k: engine + ["--threads", "2", "--repeat", str(k), "--output", out]),
-            ("engine (Ensemble, SIMD lanes)", 1, 5,
+            ("engine (run_batch, SIMD lanes)", 1, 10,
              lambda out, k: engine + ["--threads", "1", "--repeat", str(k), "--output", out]),
-            ("plain scalar C++ loop", 1, 3,
+            ("plain scalar C++ loop", 1, 5,
              lambda out, k: [args.gear_bench, "scalar", "--repeat", str(k), "--output", out] + workload),
-            ("numpy, vectorised", 1, 2,
+            ("numpy, vectorised", 1, 3,
              lambda out, k: [os.path.join(HERE, "gear_numpy.py"), params, out, "--repeat", str(k)]
              + workload)]
     if not args.skip_octave:
@@ -88,22 +90,30 @@ def run_all(args, work):
     return results
 
 
-def report(args, results):
+def report(args, results, load_before):
     reference = results[0][2]
     rate_ref = reference["realizations"] * reference["steps"] / reference["seconds"].min()
-    load = os.getloadavg()
+    cpus = os.cpu_count()
     print(f"\nworkload: {args.realizations} realizations x {args.duration} s = "
           f"{args.realizations * reference['steps']:.3g} realization-steps of h = 1 us, mu and load "
-          f"from config/; {os.cpu_count()} CPUs, load average {load[0]:.2f} at the end\n")
-    print(f"| {'implementation':32s} | threads | best time [s] (of n) | realization-steps/s "
-          f"| engine(2T) is x faster | peak RSS [MiB] |")
-    print(f"|{'-' * 34}|---------|----------------------|---------------------|"
+          f"from config/, engine blocks of {args.block} lanes; {cpus} CPUs, load average "
+          f"{load_before:.2f} before, {os.getloadavg()[0]:.2f} after")
+    if load_before > 0.25 * cpus:
+        print("warning: the machine was busy: other processes' time slices inflate the timings, "
+              "unevenly across rows; rerun on an idle machine")
+    print()
+    # CPU / wall of the best run: about the thread count when nothing else ran.
+    print(f"| {'implementation':30s} | threads | best wall time [s] (of n) | CPU/wall "
+          f"| realization-steps/s | engine(2T) is x faster | peak RSS [MiB] |")
+    print(f"|{'-' * 32}|---------|---------------------------|----------|---------------------|"
           f"------------------------|----------------|")
     for label, threads, data, rss in results:
-        best = data["seconds"].min()
-        rate = data["realizations"] * data["steps"] / best
-        print(f"| {label:32s} | {threads:7d} | {best:11.3f} ({len(data['seconds'])})"
-              f"{'':5s} | {rate:19.3e} | {rate_ref / rate:22.1f} | {rss:14.1f} |")
+        best = int(np.argmin(data["seconds"]))
+        wall = data["seconds"][best]
+        rate = data["realizations"] * data["steps"] / wall
+        print(f"| {label:30s} | {threads:7d} | {wall:12.4f} ({len(data['seconds']):2d}){'':7s} "
+              f"| {data['cpu_seconds'][best] / wall:8.2f} | {rate:19.3e} | {rate_ref / rate:22.1f} "
+              f"| {rss:14.1f} |")
 
     print(f"\ncross-checks against the engine at 2 threads:")
     ok = True

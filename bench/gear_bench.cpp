@@ -1,21 +1,19 @@
 // gear_bench: the C++ side of bench/run.
 //   gear_bench params                 the model parameters (JSON) for the numpy and Octave versions
-//   gear_bench engine --threads N ... times the package's engine on the reduced workload
+//   gear_bench engine --threads N ... times the package's engine (its batch runner) on the workload
 //   gear_bench scalar ...             times the plain scalar loop (scalar_loop.hpp)
 // Each timing run writes JSON: wall time, end states of the stochastic realizations, and a
 // deterministic run (S1) sampled on a coarse grid for the pathwise cross-check.
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
-
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <cstdio>
 #include <functional>
 #include <iostream>
 #include <string>
 #include <vector>
 
+#include "gear_dynamics/batch.hpp"
 #include "gear_dynamics/config.hpp"
 #include "gear_dynamics/ensemble.hpp"
 #include "params_json.hpp"
@@ -32,8 +30,10 @@ const char* kUsage = R"(usage: gear_bench params | engine [options] | scalar [op
   --check-duration T   deterministic run S1 for the pathwise check [s] (default 0.02)
   --check-every T      its sampling interval [s] (default 0.001)
   --threads N          engine threads (default 1)
-  --block L            lanes per engine block (default 16)
+  --block L            lanes per engine block (default 32)
   --repeat K           timed repetitions; the JSON reports each (default 3)
+  --no-noise           engine only: R copies of the deterministic run S1, lanes without
+                       random streams: the engine without the normal generation
   --output FILE        JSON output (default: stdout)
 The model is the package's default configuration (config/*.yaml).
 )";
@@ -42,7 +42,8 @@ struct Options {
   std::string mode;
   int realizations = 64;
   double duration = 0.05, check_duration = 0.02, check_every = 0.001;
-  int threads = 1, block = 16, repeat = 3;
+  int threads = 1, block = 32, repeat = 3;
+  bool noise = true;
   std::string output = "-";
 };
 
@@ -64,6 +65,7 @@ Options parse(int argc, char** argv) {
     else if (a == "--block") o.block = std::stoi(value());
     else if (a == "--repeat") o.repeat = std::stoi(value());
     else if (a == "--output") o.output = value();
+    else if (a == "--no-noise") o.noise = false;
     else throw std::runtime_error("unknown option '" + a + "'\n" + kUsage);
   }
   if (o.mode != "params" && o.mode != "engine" && o.mode != "scalar")
@@ -108,30 +110,49 @@ struct Outcome {
   std::vector<double> check_delta, check_velocity;
 };
 
-// The package's engine on `threads` threads: blocks of `block` lanes over a TBB arena. This is the
-// one place to swap in the batch runner of issue 4 once it is on main.
-void run_engine(const gd::ModelConfig& c, const Options& o, std::int64_t steps, Outcome& out) {
-  const gd::GearPair g = gd::derive(c.gear);
-  const int blocks = (o.realizations + o.block - 1) / o.block;
-  out.delta.assign(o.realizations, 0.0);
-  out.velocity.assign(o.realizations, 0.0);
-  tbb::task_arena arena(o.threads);
-  arena.execute([&] {
-    tbb::parallel_for(tbb::blocked_range<int>(0, blocks, 1), [&](const tbb::blocked_range<int>& r) {
-      for (int k = r.begin(); k < r.end(); ++k) {
-        const int first = k * o.block, count = std::min(o.block, o.realizations - first);
-        std::vector<gd::LaneSpec> lanes;
-        for (int i = 0; i < count; ++i)
-          lanes.push_back(gd::stochastic_lane(c, c.friction_coefficient, first + i));
-        gd::Ensemble e(g, c.run.time_step, c.initial, lanes, c.seed);
-        for (std::int64_t n = 0; n < steps; ++n) e.step();
-        for (int i = 0; i < count; ++i) {
-          out.delta[first + i] = e.delta()[i];
-          out.velocity[first + i] = e.velocity()[i];
-        }
-      }
-    });
-  });
+// End states of the runs a batch finishes; slot = run id - first id.
+class EndStates : public gd::BatchSink {
+ public:
+  EndStates(Outcome& out, std::size_t first_id) : out_(out), first_(first_id) {}
+  void started(const std::vector<gd::RunSpec>&) override {}
+  void recorded(const std::vector<gd::RunSpec>&, const gd::Ensemble&, const Eigen::ArrayXd&) override {}
+  void finished(const std::vector<gd::RunSpec>& block, const std::vector<gd::RunResult>& results) override {
+    for (std::size_t i = 0; i < block.size(); ++i) {  // blocks write disjoint slots
+      out_.delta[block[i].id - first_] = results[i].final_delta;
+      out_.velocity[block[i].id - first_] = results[i].final_delta_dot;
+    }
+  }
+  void abandoned(const std::vector<gd::RunSpec>&) override {}
+
+ private:
+  Outcome& out_;
+  std::size_t first_;
+};
+
+// The package's Monte Carlo runner (batch.hpp): realizations 0..R-1 at the configured mu in
+// blocks of `block` lanes on `threads` threads, through simulate() with its observers, no series.
+// --no-noise runs R copies of S1 instead: lanes without random streams.
+void run_engine(const gd::ModelConfig& c, const Options& o, Outcome& out) {
+  gd::ModelConfig model = c;
+  model.run.duration = o.duration;
+  model.run.window = std::min(model.run.window, o.duration);
+  model.run.snapshot_times.clear();
+  gd::BatchSettings s;
+  s.mu.assign(o.noise ? 1 : o.realizations, c.friction_coefficient);
+  s.realizations = o.noise ? o.realizations : 0;
+  s.phase_ensemble = false;
+  s.record_rate = s.sparse_record_rate = 0.0;
+  s.record_realizations = 0;
+  s.block_lanes = o.block;
+  s.threads = o.threads;
+  std::vector<gd::RunSpec> runs;
+  for (const gd::RunSpec& r : gd::plan_runs(model, s))
+    if ((r.kind == gd::kKindStochastic) == o.noise) runs.push_back(r);
+  out.delta.assign(runs.size(), 0.0);
+  out.velocity.assign(runs.size(), 0.0);
+  EndStates sink(out, runs.front().id);
+  gd::BatchControl control;
+  gd::run_batch(model, runs, s, sink, control);
 }
 
 void check_engine(const gd::ModelConfig& c, std::int64_t steps, std::int64_t every, Outcome& out) {
@@ -184,11 +205,13 @@ int main(int argc, char** argv) try {
   const bool engine = o.mode == "engine";
 
   Outcome out;
-  std::vector<double> seconds;
+  std::vector<double> seconds, cpu_seconds;  // wall time, CPU time of all threads
   for (int k = 0; k < o.repeat; ++k) {
     const auto start = std::chrono::steady_clock::now();
-    if (engine) run_engine(c, o, steps, out);
+    const std::clock_t cpu_start = std::clock();
+    if (engine) run_engine(c, o, out);
     else run_scalar(c, o, steps, out);
+    cpu_seconds.push_back(static_cast<double>(std::clock() - cpu_start) / CLOCKS_PER_SEC);
     seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   }
   if (engine) check_engine(c, check_steps, every, out);
@@ -200,6 +223,7 @@ int main(int argc, char** argv) try {
                 o.realizations, static_cast<long long>(steps), engine ? o.threads : 1,
                 static_cast<long long>(every));
   write(o.output, head + ("\"seconds\": " + json_array(seconds) +
+                          ",\n\"cpu_seconds\": " + json_array(cpu_seconds) +
                           ",\n\"delta\": " + json_array(out.delta) +
                           ",\n\"velocity\": " + json_array(out.velocity) +
                           ",\n\"check_delta\": " + json_array(out.check_delta) +

@@ -102,16 +102,17 @@ def main():
     params = json.load(open(args.params))
     gear = Gear(params)
     steps = round(args.duration / gear.time_step)
-    seconds, d, v = [], np.empty(0), np.empty(0)
+    seconds, cpu_seconds, d, v = [], [], np.empty(0), np.empty(0)
     for _ in range(args.repeat if args.realizations > 0 else 0):
-        start = time.perf_counter()
+        start, cpu_start = time.perf_counter(), time.process_time()
         d, v, _ = gear.run(args.realizations, steps, seed=int(params["seed"]))
         seconds.append(time.perf_counter() - start)
+        cpu_seconds.append(time.process_time() - cpu_start)
     every = round(args.check_every / gear.time_step)
     _, _, samples = gear.run(1, round(args.check_duration / gear.time_step), stochastic=False,
                              every=every)
     json.dump({"realizations": args.realizations, "steps": steps, "threads": 1,
-               "check_every": every, "seconds": seconds, "delta": d.tolist(),
+               "check_every": every, "seconds": seconds, "cpu_seconds": cpu_seconds, "delta": d.tolist(),
                "velocity": v.tolist(), "check_delta": [float(s[0][0]) for s in samples],
                "check_velocity": [float(s[1][0]) for s in samples]}, open(args.output, "w"))
 

@@ -8,16 +8,19 @@ function gear_octave(params_file, output_file, realizations, duration, check_dur
   p = jsondecode(fileread(params_file));
   steps = round(duration / p.time_step);
   seconds = zeros(repeat, 1);
+  cpu_seconds = zeros(repeat, 1);
   for r = 1:repeat
     randn('state', p.seed);
     tic;
+    cpu_start = cputime;
     [d, v] = simulate(p, realizations, steps, true, 0);
+    cpu_seconds(r) = cputime - cpu_start;
     seconds(r) = toc;
   end
   every = round(check_every / p.time_step);
   [~, ~, check] = simulate(p, 1, round(check_duration / p.time_step), false, every);
   out = struct('realizations', realizations, 'steps', steps, 'threads', 1, 'check_every', every, ...
-               'seconds', seconds, 'delta', d, 'velocity', v, ...
+               'seconds', seconds, 'cpu_seconds', cpu_seconds, 'delta', d, 'velocity', v, ...
                'check_delta', check(:, 1), 'check_velocity', check(:, 2));
   fid = fopen(output_file, 'w');
   fprintf(fid, '%s\n', jsonencode(out));
