@@ -21,6 +21,10 @@ constexpr uint32_t kQueue = 1000;
 constexpr auto kMaxLag = std::chrono::milliseconds(100);
 // While paused, /clock is republished this often so that sim-time nodes see the time.
 constexpr auto kIdleClockPeriod = std::chrono::milliseconds(100);
+// While running, /clock goes out at every publish instant but at most every 0.5 ms of wall time
+// (as Gazebo throttles its clock): every sim-time node, this one included, wakes up for each
+// /clock message. Real time at 1 kHz keeps every one.
+constexpr auto kClockInterval = std::chrono::microseconds(500);
 
 LaneSpec lane_of(const ModelConfig& c, const SimulatorSettings& s) {
   return s.deterministic ? deterministic_lane(c, c.friction_coefficient)
@@ -91,13 +95,17 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
   diagnostics_timer_ = nh_.createWallTimer(ros::WallDuration(1.0),
                                            [this](const ros::WallTimerEvent&) { updater_.force_update(); });
 
-  const double h = config_.run.time_step;
-  ROS_INFO("gear_simulator: %s, seed %llu, mu %g, sigma %g m/s^2/sqrt(s), lambda %g m/s^3, h %g s, "
-           "t_end %g s%s, publishing every %lld steps (%g Hz simulated), real_time_factor %g%s",
-           settings_.deterministic ? "deterministic load S1" : ("stochastic realization " + std::to_string(settings_.realization)).c_str(),
-           static_cast<unsigned long long>(config_.seed), lane.mu, lane.sigma, lane.drift, h, settings_.t_end,
-           settings_.t_end == 0.0 ? " (run on forever)" : settings_.loop ? " (looping)" : "",
-           static_cast<long long>(period_), 1.0 / (static_cast<double>(period_) * h), real_time_factor_,
+  const std::string load = settings_.deterministic
+                               ? "the deterministic load S1"
+                               : "stochastic realization " + std::to_string(settings_.realization);
+  const std::string end = settings_.t_end == 0.0 ? "run on forever"
+                          : settings_.loop       ? "loop at t_end = " + seconds(settings_.t_end)
+                                                 : "stop at t_end = " + seconds(settings_.t_end);
+  ROS_INFO("gear_simulator: %s, seed %llu, mu %g, sigma %g m/s^2/sqrt(s), lambda %g m/s^3, h = %s, %s; "
+           "publishing every %lld steps (%g Hz simulated), real_time_factor %g%s",
+           load.c_str(), static_cast<unsigned long long>(config_.seed), lane.mu, lane.sigma, lane.drift,
+           seconds(config_.run.time_step).c_str(), end.c_str(), static_cast<long long>(period_),
+           1.0 / (static_cast<double>(period_) * config_.run.time_step), real_time_factor_,
            paused_ ? ", paused" : "");
   thread_ = std::thread(&GearSimulator::run, this);
 }
@@ -192,7 +200,8 @@ void GearSimulator::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) 
   using diagnostic_msgs::DiagnosticStatus;
   if (!s.divergence.empty()) {
     stat.summary(DiagnosticStatus::ERROR, "diverged: " + s.divergence);
-  } else if (s.state == "running" && s.real_time_factor > 0.0 && wall > 0.5 && rtf < 0.9 * s.real_time_factor) {
+  } else if (s.state == "running" && s.real_time_factor > 0.0 && wall > 0.5 &&
+             rtf < 0.9 * s.real_time_factor) {
     stat.summaryf(DiagnosticStatus::WARN, "running slower than requested: real-time factor %.3g of %.3g",
                   rtf, s.real_time_factor);
   } else {
@@ -226,7 +235,9 @@ void GearSimulator::run() {
     const auto start = WallClock::now();
     const bool stepping = r.step && outcome.ok;
     if (running() || stepping) advance();
-    if (stepping) outcome = diverged_ ? Outcome{false, divergence_} : Outcome{true, "t = " + seconds(ensemble_.time())};
+    if (stepping) {
+      outcome = diverged_ ? Outcome{false, divergence_} : Outcome{true, "t = " + seconds(ensemble_.time())};
+    }
     const LaneSpec& lane = ensemble_.lane(0);
     local_.time = ensemble_.time();
     local_.state = state_name();
@@ -297,7 +308,8 @@ GearSimulator::Outcome GearSimulator::apply(const Request& r) {
     ROS_WARN("%s", why.c_str());
     out = Outcome{false, why};
   };
-  const std::string at_end = "the run is at t_end = " + seconds(settings_.t_end) + "; call ~reset to run again";
+  const std::string at_end =
+      "the run is at t_end = " + seconds(settings_.t_end) + "; call ~reset to run again";
   const std::string blew_up = "the run diverged (" + divergence_ + "); call ~reset to start over";
   if (r.paused) {
     if (*r.paused) {
@@ -350,7 +362,8 @@ void GearSimulator::advance() {
 
 void GearSimulator::publish() {
   const bool want_state = state_pub_.getNumSubscribers() > 0;
-  const bool want_d = want_state || (settings_.publish_scalars && center_distance_pub_.getNumSubscribers() > 0);
+  const bool want_d =
+      want_state || (settings_.publish_scalars && center_distance_pub_.getNumSubscribers() > 0);
   const GearState m = make_state(ensemble_, 0, want_d ? window_.center_distance()[0] : 0.0);
   if (!std::isfinite(m.delta) || !std::isfinite(m.delta_dot) || !std::isfinite(m.phi) ||
       !std::isfinite(m.center_distance)) {
@@ -358,7 +371,7 @@ void GearSimulator::publish() {
             " m, delta_dot = " + std::to_string(m.delta_dot) + " m/s, Phi = " + std::to_string(m.phi) + " m/s^2");
     return;
   }
-  publish_clock();
+  publish_clock(false);
   if (want_state) state_pub_.publish(m);
   if (settings_.publish_scalars) {
     publish_scalar(delta_pub_, m.delta);
@@ -369,8 +382,10 @@ void GearSimulator::publish() {
   ++local_.publications;
 }
 
-void GearSimulator::publish_clock() {
-  if (!settings_.publish_clock) return;
+void GearSimulator::publish_clock(bool always) {
+  const auto now = WallClock::now();
+  if (!settings_.publish_clock || (!always && now - last_clock_ < kClockInterval)) return;
+  last_clock_ = now;
   rosgraph_msgs::Clock c;
   c.clock = sim_stamp(ensemble_.time());
   clock_pub_.publish(c);
@@ -437,11 +452,9 @@ void GearSimulator::pace() {
 }
 
 void GearSimulator::idle() {
-  {
-    std::unique_lock<std::mutex> lock(mutex_);
-    wake_.wait_for(lock, kIdleClockPeriod, [&] { return has_pending_ || stop_; });
-  }
-  publish_clock();
+  publish_clock(true);  // where time stands, at once and every kIdleClockPeriod
+  std::unique_lock<std::mutex> lock(mutex_);
+  wake_.wait_for(lock, kIdleClockPeriod, [&] { return has_pending_ || stop_; });
 }
 
 std::string GearSimulator::state_name() const {

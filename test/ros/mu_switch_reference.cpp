@@ -19,15 +19,17 @@ int main(int argc, char** argv) try {
   const std::string run = argv[2];
   const std::int64_t every = std::stoll(argv[3]), end = std::stoll(argv[4]), at = std::stoll(argv[5]);
   const double mu = std::stod(argv[6]);
-  const gd::LaneSpec lane = run == "S1" ? gd::deterministic_lane(cfg, cfg.friction_coefficient)
-                                        : gd::stochastic_lane(cfg, cfg.friction_coefficient, std::stoull(run));
+  const gd::LaneSpec lane = run == "S1"
+                                ? gd::deterministic_lane(cfg, cfg.friction_coefficient)
+                                : gd::stochastic_lane(cfg, cfg.friction_coefficient, std::stoull(run));
   gd::Ensemble e(gd::derive(cfg.gear), cfg.run.time_step, cfg.initial, {lane}, cfg.seed);
   FILE* out = std::fopen(argv[7], "w");
   if (!out) throw std::runtime_error(std::string("cannot write ") + argv[7]);
   for (;;) {
     const std::int64_t n = e.step_index();
     if (n % every == 0 || n == end)
-      std::fprintf(out, "%.17g,%.17g,%.17g,%.17g,%.17g\n", e.time(), e.delta()[0], e.velocity()[0], e.load()[0], e.lane(0).mu);
+      std::fprintf(out, "%.17g,%.17g,%.17g,%.17g,%.17g\n", e.time(), e.delta()[0], e.velocity()[0],
+                   e.load()[0], e.lane(0).mu);
     if (n == end) break;
     if (n == at) e.set_mu(0, mu);  // as the node: after publishing step n, before integrating it
     e.step();

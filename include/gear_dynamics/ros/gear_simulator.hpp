@@ -75,7 +75,7 @@ class GearSimulator {
   Outcome apply(const Request& r);
   void advance();       // integrates to the next publish instant (or t_end) and publishes
   void publish();       // state, scalars and /clock at the current grid point
-  void publish_clock();
+  void publish_clock(bool always);  // else throttled to kClockInterval of wall time
   void publish_run_info();
   void restart();       // back to t = 0, the start of the random stream, published
   void diverge(const std::string& what);
@@ -102,6 +102,7 @@ class GearSimulator {
   bool anchored_ = false;  // pacing restarts from (anchor_wall_, anchor_step_) when false
   WallClock::time_point anchor_wall_;
   std::int64_t anchor_step_ = 0;
+  WallClock::time_point last_clock_;
   Status local_;  // the stepping thread's copy of the status, handed over under mutex_
 
   // Shared between the threads under mutex_.
