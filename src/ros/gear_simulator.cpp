@@ -267,7 +267,7 @@ GearSimulator::Outcome GearSimulator::apply(const Request& r) {
   const double t = ensemble_.time();
   const auto n = static_cast<long long>(ensemble_.step_index());
   const auto changed = [&](const char* name, double from, double to, const char* unit) {
-    ROS_INFO("%s: %g -> %g %s from t = %.9g s (step %lld)", name, from, to, unit, t, n);
+    ROS_INFO("%s: %g -> %g%s from t = %.9g s (step %lld)", name, from, to, unit, t, n);
   };
   const LaneSpec& lane = ensemble_.lane(0);
   if (r.mu) {
@@ -275,15 +275,15 @@ GearSimulator::Outcome GearSimulator::apply(const Request& r) {
     ensemble_.set_mu(0, *r.mu);
   }
   if (r.sigma) {
-    changed("sigma", lane.sigma, *r.sigma, "m/s^2/sqrt(s)");
+    changed("sigma", lane.sigma, *r.sigma, " m/s^2/sqrt(s)");
     ensemble_.set_sigma(0, *r.sigma);
   }
   if (r.drift) {
-    changed("lambda", lane.drift, *r.drift, "m/s^3");
+    changed("lambda", lane.drift, *r.drift, " m/s^3");
     ensemble_.set_drift(0, *r.drift);
   }
   if (r.real_time_factor) {
-    changed("real_time_factor", real_time_factor_, *r.real_time_factor, "(0 = as fast as possible)");
+    changed("real_time_factor", real_time_factor_, *r.real_time_factor, " (0 = as fast as possible)");
     real_time_factor_ = *r.real_time_factor;
     anchored_ = false;
   }
@@ -291,7 +291,7 @@ GearSimulator::Outcome GearSimulator::apply(const Request& r) {
     publish_rate_ = *r.publish_rate;
     period_ = publish_period_steps(publish_rate_, config_.run.time_step);
     const double effective = 1.0 / (static_cast<double>(period_) * config_.run.time_step);
-    changed("publish_rate", local_.publish_rate, effective, "Hz simulated");
+    changed("publish_rate", local_.publish_rate, effective, " Hz simulated");
     if (period_ % window_.block_steps() != 0)
       ROS_INFO("center_distance windows may start up to %lld steps early until ~reset (block of the "
                "trailing-window observer)", static_cast<long long>(window_.block_steps() - 1));
