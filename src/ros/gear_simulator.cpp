@@ -464,9 +464,9 @@ std::string GearSimulator::state_name() const {
 }
 
 WindowRange GearSimulator::make_window() const {
-  // Blocks that make the window exact at every publish instant (as simulate() does).
+  // Blocks that make the window exact at every publish instant and at t_end (as simulate() does).
   const std::int64_t window = std::max<std::int64_t>(config_.run.steps_for(config_.run.window), 1);
-  return WindowRange(1, window, std::gcd(window, period_));
+  return WindowRange(1, window, std::gcd(std::gcd(window, period_), end_step_));
 }
 
 }  // namespace gear_dynamics
