@@ -205,9 +205,10 @@ class AggregatorEndToEnd(unittest.TestCase):
 
         sub = rospy.Subscriber("/gear/state", GearState, on_state, queue_size=len(expected) + 10)
         # -d: pause after advertising so that the subscription is connected before the first message;
-        # --queue: the series plays at 1e5 messages/s of wall time, faster than Python takes them.
-        subprocess.run(["rosbag", "play", "-q", "-d", "1", "--queue", str(len(expected) + 10), "--topics", "/gear/state",
-                        "--", path], check=True, stdout=subprocess.DEVNULL, timeout=60)
+        # -r: at its recorded rate the series would play at 1e5 messages/s of wall time, and
+        # messages still queued when rosbag play exits are lost (seen under load): 2000/s instead.
+        subprocess.run(["rosbag", "play", "-q", "-d", "1", "-r", "0.02", "--queue", str(len(expected) + 10),
+                        "--topics", "/gear/state", "--", path], check=True, stdout=subprocess.DEVNULL, timeout=60)
         deadline = time.time() + 10
         while time.time() < deadline:
             with lock:
