@@ -39,7 +39,7 @@ struct BatchSettings {
   std::string output_dir = "batch";
   bool overwrite = false;               // replace a folder that holds another batch
   int shard_index = 0, shard_count = 1;
-  int block_lanes = 8;                  // realizations stepped together
+  int block_lanes = 32;                 // realizations stepped together
   int threads = 0;                      // 0 = all cores
 };
 

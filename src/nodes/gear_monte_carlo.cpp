@@ -1,6 +1,7 @@
 // gear_monte_carlo: runs a Monte Carlo batch (MODEL.md §4, §6) into a folder of bags (the batch
 // folder contract of PROTOCOL.md), resumable, shardable, interruptible, with progress.
 #include <ros/ros.h>
+#include <sys/resource.h>
 
 #include <csignal>
 #include <chrono>
@@ -91,10 +92,13 @@ class MonteCarloNode {
     }
     publish(sink, true);
     const double wall = elapsed();
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
     ROS_INFO("gear_monte_carlo: %zu of %zu bags written in %.2f s wall (%.3g realization-steps/s; bag writer "
-             "thread %.2f s CPU)%s",
+             "thread %.2f s CPU; peak RSS %.0f MB)%s",
              sink.bags_written(), todo_.size(), wall, static_cast<double>(control_.realization_steps) / wall,
-             sink.writer_cpu_seconds(), complete ? "" : "; the rest stay to do: run the same batch again to resume");
+             sink.writer_cpu_seconds(), static_cast<double>(usage.ru_maxrss) / 1024.0,
+             complete ? "" : "; the rest stay to do: run the same batch again to resume");
     if (!failure.empty()) {
       ROS_FATAL("gear_monte_carlo: %s", failure.c_str());
       return 1;
