@@ -94,7 +94,8 @@ struct BatchControl {
 // Threads a batch runs on: settings.threads, or all cores available to the process if 0.
 int batch_threads(const BatchSettings& settings);
 
-// Steps `runs` in blocks of settings.block_lanes on settings.threads threads. After `stop`, blocks
+// Steps `runs` in blocks of settings.block_lanes on settings.threads threads, densely recorded
+// blocks first (their output takes longest to write). After `stop`, blocks
 // that record are abandoned at their next recorded step; blocks without a series finish.
 // Rethrows the first error (e.g. DivergenceError) after the blocks in flight have ended.
 void run_batch(const ModelConfig& model, const std::vector<RunSpec>& runs,

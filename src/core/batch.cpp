@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <exception>
@@ -264,7 +265,14 @@ int batch_threads(const BatchSettings& settings) {
 void run_batch(const ModelConfig& model, const std::vector<RunSpec>& runs,
                const BatchSettings& settings, BatchSink& sink, BatchControl& control) {
   struct Abandon {};  // thrown out of simulate() by the recorder once stop is set
-  const std::vector<std::vector<RunSpec>> blocks = make_blocks(runs, settings.block_lanes);
+  // Densely recorded blocks first: their bags take the writer longest, so it starts on them while
+  // the other blocks are stepped.
+  std::vector<std::vector<RunSpec>> blocks = make_blocks(runs, settings.block_lanes);
+  const auto density = [](const std::vector<RunSpec>& b) {
+    return b.front().record_every > 0 ? 1.0 / static_cast<double>(b.front().record_every) : 0.0;
+  };
+  std::stable_sort(blocks.begin(), blocks.end(),
+                   [&](const auto& a, const auto& b) { return density(a) > density(b); });
   const std::int64_t total = model.run.steps();
   std::exception_ptr error;
   std::mutex error_mutex;
@@ -299,13 +307,14 @@ void run_batch(const ModelConfig& model, const std::vector<RunSpec>& runs,
     }
   };
 
-  tbb::task_arena arena(batch_threads(settings));
+  // Every thread takes the next block in that order.
+  const int threads = batch_threads(settings);
+  std::atomic<std::size_t> next{0};
+  tbb::task_arena arena(threads);
   arena.execute([&] {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks.size(), 1),
-                      [&](const tbb::blocked_range<std::size_t>& range) {
-                        for (std::size_t i = range.begin(); i != range.end(); ++i) run_block(blocks[i]);
-                      },
-                      tbb::simple_partitioner());
+    tbb::parallel_for(0, threads, [&](int) {
+      for (std::size_t i = next++; i < blocks.size(); i = next++) run_block(blocks[i]);
+    });
   });
   if (error) std::rethrow_exception(error);
 }
