@@ -41,7 +41,6 @@ class WindowRange {
   Eigen::ArrayXXd blocks_;  // column i: block segment_index_ * segment_ + i (-inf = no sample)
   Eigen::ArrayXXd suffix_;  // column i: blocks i..segment_-1 of the previous segment
   Eigen::ArrayXd prefix_;   // blocks of the current segment before block_index_
-  Eigen::ArrayXd sample_;   // scratch
 };
 
 // t_ss: the last grid time at which |delta - b| > tolerance, 0 if none (MODEL.md §8).

@@ -19,7 +19,6 @@ WindowRange::WindowRange(int lanes, std::int64_t window_steps, std::int64_t bloc
   blocks_.resize(4 * lanes, segment);
   suffix_.resize(4 * lanes, segment);
   prefix_.resize(4 * lanes);
-  sample_.resize(4 * lanes);
   reset();
 }
 
@@ -32,7 +31,6 @@ void WindowRange::reset() {
 
 void WindowRange::observe(std::int64_t n, const Eigen::Ref<const Eigen::ArrayXd>& delta,
                           const Eigen::Ref<const Eigen::ArrayXd>& velocity) {
-  sample_ << delta, -delta, velocity, -velocity;
   const std::int64_t block = n / block_;
   if (block != block_index_) {
     const std::int64_t segment = block / segment_;
@@ -52,7 +50,11 @@ void WindowRange::observe(std::int64_t n, const Eigen::Ref<const Eigen::ArrayXd>
     block_index_ = block;
   }
   auto current = blocks_.col(block - segment_index_ * segment_);
-  current = current.max(sample_);
+  const auto l = static_cast<Eigen::Index>(lanes_);
+  current.segment(0, l) = current.segment(0, l).max(delta);
+  current.segment(l, l) = current.segment(l, l).max(-delta);
+  current.segment(2 * l, l) = current.segment(2 * l, l).max(velocity);
+  current.segment(3 * l, l) = current.segment(3 * l, l).max(-velocity);
   last_ = n;
 }
 
