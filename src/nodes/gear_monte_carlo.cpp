@@ -65,6 +65,7 @@ class MonteCarloNode {
     gd::write_manifest(model_, settings_, runs_, todo_.empty());
 
     gd::BagSink sink(model_, settings_.output_dir);
+    publish(sink, false);  // the totals at once, for rostopic echo
     std::thread monitor([&] { watch(sink); });
     std::string failure;
     try {
@@ -103,8 +104,8 @@ class MonteCarloNode {
       ROS_FATAL("gear_monte_carlo: %s", failure.c_str());
       return 1;
     }
-    if (g_signal != 0) return 128 + g_signal;
-    return complete ? 0 : 1;
+    if (complete) return 0;
+    return g_signal != 0 ? 128 + g_signal : 1;
   }
 
  private:
