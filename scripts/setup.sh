@@ -50,4 +50,6 @@ gd_build() {
 }
 
 gd_install
-gd_build
+# GD_BUILD_ARGS: extra catkin_make arguments (CMake options, targets), e.g. from scripts/sanitize.sh.
+read -ra gd_build_args <<< "${GD_BUILD_ARGS:-}"
+gd_build "${gd_build_args[@]}"

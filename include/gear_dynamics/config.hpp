@@ -46,6 +46,18 @@ constexpr double kMaxLoadDrift = 1.0e6;
 // RK4 is stable for an undamped oscillator while omega h < 2 sqrt(2) (MODEL.md §5).
 constexpr double kMaxOmegaTimesStep = 2.8284271247461903;
 
+// One key of the schema: the kind and range (closed unless open_*) its value must have. The
+// validator is driven by this table; tests generate their bad input from it.
+enum class KeyKind { Real, Integer, RealList };
+struct KeySpec {
+  std::string section, key;
+  KeyKind kind;
+  double lo, hi;
+  bool open_lo, open_hi;
+  std::string unit;
+};
+std::vector<KeySpec> config_schema();
+
 // Validates the sections gear_pair, load and run of `root`. Other top-level keys are left alone
 // (a node's namespace holds more than the model). Throws ConfigError listing every problem.
 ModelConfig parse_config(const YAML::Node& root);

@@ -37,7 +37,7 @@ using detail::show;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kPi = 3.14159265358979323846;
 
-enum class Kind { Real, Integer, RealList };
+using Kind = KeyKind;
 
 // One key of the schema: its range (closed unless `open_*`), unit and where it goes.
 struct Field {
@@ -107,7 +107,8 @@ const std::vector<Section>& schema() {
       {"run",
        {GD_REAL("time_step", 0, 1e-4, true, false, "s", run.time_step),
         GD_REAL("duration", 0, 1e4, true, false, "s", run.duration),
-        integer("seed", 0, 9007199254740992.0, "-",
+        // Below 2^53: every accepted seed is exact as a double (YAML numbers are read as one).
+        integer("seed", 0, 9007199254740991.0, "-",
                 [](ModelConfig& c, double v) { c.seed = static_cast<std::uint64_t>(v); },
                 [](const ModelConfig& c) { return YAML::Node(c.seed); }),
         GD_REAL("window", 0, kInf, true, true, "s", run.window),
@@ -130,6 +131,7 @@ const std::vector<Section>& schema() {
 
 std::string range_text(const Field& f) {
   std::ostringstream s;
+  if (f.kind == Kind::Integer) s.precision(17);
   s << (f.open_lo ? "(" : "[") << f.lo << ", " << f.hi << (f.open_hi ? ")" : "]");
   if (f.kind == Kind::Integer) s << " (integer)";
   s << " " << f.unit;
@@ -142,7 +144,7 @@ bool in_range(const Field& f, double v) {
 
 void check_value(const Field& f, const std::string& path, double v, std::vector<std::string>& errors) {
   std::ostringstream e;
-  e.precision(12);
+  e.precision(f.kind == Kind::Integer ? 17 : 12);
   if (!std::isfinite(v)) {
     e << path << " = " << v << " is not finite; allowed " << range_text(f);
   } else if (f.kind == Kind::Integer && v != std::floor(v)) {
@@ -233,6 +235,13 @@ void validate_consistency(const ModelConfig& c) {
     for (const auto& m : errors) all += "\n  " + m;
     throw ConfigError(all);
   }
+}
+
+std::vector<KeySpec> config_schema() {
+  std::vector<KeySpec> keys;
+  for (const Section& s : schema())
+    for (const Field& f : s.fields) keys.push_back({s.name, f.key, f.kind, f.lo, f.hi, f.open_lo, f.open_hi, f.unit});
+  return keys;
 }
 
 ModelConfig parse_config(const YAML::Node& root) {
