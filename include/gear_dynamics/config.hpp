@@ -84,6 +84,8 @@ namespace detail {
 bool as_number(const YAML::Node& n, double& out);
 // A node as one line of YAML, for error messages.
 std::string show(const YAML::Node& n);
+// Throws one ConfigError listing every message, if there are any.
+void throw_if_errors(const std::vector<std::string>& errors);
 }  // namespace detail
 
 }  // namespace gear_dynamics

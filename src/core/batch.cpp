@@ -176,11 +176,7 @@ BatchSettings parse_batch_settings(const YAML::Node& section, const ModelConfig&
   s.block_lanes = static_cast<int>(in.number("block_lanes", 1, 4096, true, "lanes"));
   s.threads = static_cast<int>(in.number("threads", 0, 1024, true, "threads (0 = all cores)"));
   in.finish();
-  if (!errors.empty()) {
-    std::string all = "invalid configuration:";
-    for (const auto& m : errors) all += "\n  " + m;
-    throw ConfigError(all);
-  }
+  detail::throw_if_errors(errors);
   return s;
 }
 

@@ -27,12 +27,20 @@ bool as_number(const YAML::Node& n, double& out) {
   }
 }
 
+void throw_if_errors(const std::vector<std::string>& errors) {
+  if (errors.empty()) return;
+  std::string all = "invalid configuration:";
+  for (const auto& m : errors) all += "\n  " + m;
+  throw ConfigError(all);
+}
+
 }  // namespace detail
 
 namespace {
 
 using detail::as_number;
 using detail::show;
+using detail::throw_if_errors;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kPi = 3.14159265358979323846;
@@ -230,11 +238,7 @@ void validate_consistency(const ModelConfig& c) {
       << "; allowed (0, steady_state_tolerance]";
     errors.push_back(e.str());
   }
-  if (!errors.empty()) {
-    std::string all = "invalid configuration:";
-    for (const auto& m : errors) all += "\n  " + m;
-    throw ConfigError(all);
-  }
+  throw_if_errors(errors);
 }
 
 std::vector<KeySpec> config_schema() {
@@ -305,13 +309,9 @@ ModelConfig parse_config(const YAML::Node& root) {
       if (errors.size() == before) f.set(c, x);
     }
   }
-  if (errors.empty()) {
-    validate_consistency(c);  // only meaningful once every value is in range
-    return c;
-  }
-  std::string all = "invalid configuration:";
-  for (const auto& m : errors) all += "\n  " + m;
-  throw ConfigError(all);
+  throw_if_errors(errors);
+  validate_consistency(c);  // only meaningful once every value is in range
+  return c;
 }
 
 void merge_yaml(YAML::Node& base, const YAML::Node& overlay) {

@@ -1,7 +1,9 @@
 // Observers on synthetic signals with known answers.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "gear_dynamics/ensemble.hpp"
 #include "gear_dynamics/observers.hpp"
@@ -14,6 +16,18 @@ namespace {
 // Two lanes of deterministic but irregular signals.
 double sig_d(std::int64_t n, int lane) { return std::sin(0.013 * n + lane) + 0.3 * std::cos(0.0071 * static_cast<double>((n * n) % 97)); }
 double sig_v(std::int64_t n, int lane) { return std::cos(0.029 * n - lane) * (1.0 + 0.001 * n); }
+
+// Ranges (delta, delta_dot) of the signals over grid points first..last, by brute force.
+std::pair<double, double> brute_ranges(std::int64_t first, std::int64_t last, int lane) {
+  double dmax = -1e300, dmin = 1e300, vmax = -1e300, vmin = 1e300;
+  for (std::int64_t k = first; k <= last; ++k) {
+    dmax = std::max(dmax, sig_d(k, lane));
+    dmin = std::min(dmin, sig_d(k, lane));
+    vmax = std::max(vmax, sig_v(k, lane));
+    vmin = std::min(vmin, sig_v(k, lane));
+  }
+  return {dmax - dmin, vmax - vmin};
+}
 
 }  // namespace
 
@@ -30,16 +44,10 @@ TEST(WindowRange, MatchesBruteForceAtBlockBoundaries) {
     range.observe(n, d, v);
     if (n % block != 0) continue;
     for (int l = 0; l < 2; ++l) {
-      double dmax = -1e300, dmin = 1e300, vmax = -1e300, vmin = 1e300;
-      for (std::int64_t k = std::max<std::int64_t>(0, n - window); k <= n; ++k) {
-        dmax = std::max(dmax, sig_d(k, l));
-        dmin = std::min(dmin, sig_d(k, l));
-        vmax = std::max(vmax, sig_v(k, l));
-        vmin = std::min(vmin, sig_v(k, l));
-      }
-      ASSERT_EQ(range.delta_range()[l], dmax - dmin) << "n " << n;
-      ASSERT_EQ(range.velocity_range()[l], vmax - vmin) << "n " << n;
-      ASSERT_EQ(range.center_distance()[l], std::sqrt((dmax - dmin) * (vmax - vmin)));
+      const auto [dr, vr] = brute_ranges(std::max<std::int64_t>(0, n - window), n, l);
+      ASSERT_EQ(range.delta_range()[l], dr) << "n " << n;
+      ASSERT_EQ(range.velocity_range()[l], vr) << "n " << n;
+      ASSERT_EQ(range.center_distance()[l], std::sqrt(dr * vr));
     }
   }
 }
@@ -79,15 +87,9 @@ TEST(WindowRange, EveryStepAcrossSegmentsFromALateStart) {
     range.observe(n, d, v);
     const std::int64_t first = std::max(start, n - window < 0 ? 0 : (n - window) / block * block);
     for (int l = 0; l < 2; ++l) {
-      double dmax = -1e300, dmin = 1e300, vmax = -1e300, vmin = 1e300;
-      for (std::int64_t k = first; k <= n; ++k) {
-        dmax = std::max(dmax, sig_d(k, l));
-        dmin = std::min(dmin, sig_d(k, l));
-        vmax = std::max(vmax, sig_v(k, l));
-        vmin = std::min(vmin, sig_v(k, l));
-      }
-      ASSERT_EQ(range.delta_range()[l], dmax - dmin) << "n " << n;
-      ASSERT_EQ(range.velocity_range()[l], vmax - vmin) << "n " << n;
+      const auto [dr, vr] = brute_ranges(first, n, l);
+      ASSERT_EQ(range.delta_range()[l], dr) << "n " << n;
+      ASSERT_EQ(range.velocity_range()[l], vr) << "n " << n;
     }
   }
   EXPECT_THROW(gd::WindowRange(1, 50, 20), std::invalid_argument);  // a block must divide the window
