@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Runs the four implementations on one workload, cross-checks them and prints the table.
-Called by bench/run (which builds gear_bench first); see bench/run --help."""
+Called by bench/run, which builds gear_bench first and passes its options on (--help)."""
 import argparse
 import json
 import os
