@@ -6,8 +6,9 @@ set -euo pipefail
 
 GD_REPO=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 # Outside the repo: a workspace inside it would make src/gear_dynamics a symlink loop for the
-# tools that follow links (rosrun's find -L).
-GD_WS=${GD_WS:-${XDG_CACHE_HOME:-$HOME/.cache}/gear_dynamics/ws-$(echo -n "$GD_REPO" | md5sum | cut -c1-12)}
+# tools that follow links (rosrun's find -L). GD_WS_SUFFIX names a sibling workspace (the
+# sanitizer builds of scripts/sanitize.sh).
+GD_WS=${GD_WS:-${XDG_CACHE_HOME:-$HOME/.cache}/gear_dynamics/ws-$(echo -n "$GD_REPO" | md5sum | cut -c1-12)${GD_WS_SUFFIX:-}}
 
 # catkin's helpers need Debian's python3 (with catkin_pkg, rospkg, genmsg); a pyenv or venv
 # python3 first on PATH breaks them ("No module named ..."), so Debian's goes first.

@@ -9,4 +9,6 @@ status=0
 (cd "$GD_WS" && catkin_make run_tests -j"$(nproc)") || status=$?
 echo
 catkin_test_results --verbose "$GD_WS/build/test_results" || status=1
+# The fault suite's table: cases tried and passed per category (test/faults/summary.py).
+/usr/bin/python3 "$GD_REPO/test/faults/summary.py" "$GD_WS/build/test_results" || status=1
 exit $status

@@ -11,118 +11,13 @@
 #include <map>
 #include <mutex>
 #include <set>
-#include <sstream>
 #include <tuple>
+
+#include "gear_dynamics/section_reader.hpp"
 
 namespace gear_dynamics {
 
 namespace {
-
-// Reads the keys of one section, collecting a message per problem (key, value, allowed range).
-class SectionReader {
- public:
-  SectionReader(const YAML::Node& node, std::string section, std::vector<std::string>& errors)
-      : node_(node), section_(std::move(section)), errors_(errors) {}
-
-  double number(const char* key, double lo, double hi, bool integer, const char* unit) {
-    const YAML::Node v = get(key);
-    double x = lo;
-    if (!v) return x;
-    std::ostringstream range;
-    range.precision(12);
-    range << "[" << lo << ", " << hi << "]" << (integer ? " (integer)" : "") << " " << unit;
-    if (!detail::as_number(v, x)) {
-      error(key) << " = " << detail::show(v) << " has the wrong type: expected a number in " << range.str();
-    } else if (!std::isfinite(x) || x < lo || x > hi || (integer && x != std::floor(x))) {
-      error(key) << " = " << x << " is out of range; allowed " << range.str();
-    } else {
-      return x;
-    }
-    return lo;
-  }
-
-  bool boolean(const char* key) {
-    const YAML::Node v = get(key);
-    if (!v) return false;
-    if (v.IsScalar()) {
-      const std::string& s = v.Scalar();
-      if (s == "true" || s == "True") return true;
-      if (s == "false" || s == "False") return false;
-    }
-    error(key) << " = " << detail::show(v) << " has the wrong type: expected true or false";
-    return false;
-  }
-
-  std::string text(const char* key) {
-    const YAML::Node v = get(key);
-    if (v && v.IsScalar() && !v.Scalar().empty()) return v.Scalar();
-    if (v) error(key) << " = " << detail::show(v) << " is not allowed: expected a non-empty path";
-    return "";
-  }
-
-  std::vector<double> numbers(const char* key, double lo, double hi, const char* unit) {
-    const YAML::Node v = get(key);
-    std::vector<double> out;
-    if (!v) return out;
-    if (!v.IsSequence() || v.size() == 0) {
-      error(key) << " = " << detail::show(v) << " is not allowed: expected a non-empty list of numbers in ["
-                 << lo << ", " << hi << "] " << unit;
-      return out;
-    }
-    for (std::size_t i = 0; i < v.size(); ++i) {
-      double x;
-      if (!detail::as_number(v[i], x) || !std::isfinite(x) || x < lo || x > hi) {
-        error(key) << "[" << i << "] = " << detail::show(v[i]) << " is out of range; allowed [" << lo
-                   << ", " << hi << "] " << unit;
-      } else {
-        out.push_back(x);
-      }
-    }
-    return out;
-  }
-
-  // A message about `key`; flushed into the list when the next one starts or on finish().
-  std::ostringstream& error(const std::string& key) {
-    flush();
-    pending_.precision(12);
-    pending_ << section_ << "." << key;
-    return pending_;
-  }
-
-  // Unknown keys are typos: refuse them, naming the valid ones.
-  void finish() {
-    flush();
-    for (const auto& kv : node_) {
-      const std::string key = kv.first.as<std::string>();
-      if (seen_.count(key)) continue;
-      std::string valid;
-      for (const std::string& k : seen_) valid += (valid.empty() ? "" : ", ") + k;
-      errors_.push_back(section_ + "." + key + " is not a known key (a typo?); valid keys: " + valid);
-    }
-  }
-
- private:
-  YAML::Node get(const char* key) {
-    seen_.insert(key);
-    const YAML::Node v = node_[key];
-    if (!v || v.IsNull()) {
-      error(key) << " is missing";
-      return YAML::Node();
-    }
-    return v;
-  }
-
-  void flush() {
-    if (!pending_.str().empty()) errors_.push_back(pending_.str());
-    pending_.str("");
-  }
-
-  const YAML::Node& node_;
-  std::string section_;
-  std::vector<std::string>& errors_;
-  std::set<std::string> seen_;
-  std::ostringstream pending_;
-};
 
 // Grid steps between recorded states at `rate` [Hz]; `rate` must give a whole number of steps
 // that divides the run, so the series ends at T.
@@ -132,9 +27,10 @@ std::int64_t record_interval(SectionReader& in, const char* key, double rate, co
   const std::int64_t every = std::llround(k), total = model.run.steps();
   if (every >= 1 && std::abs(k - static_cast<double>(every)) <= 1e-9 * k && total % every == 0)
     return every;
-  in.error(key) << " = " << rate << " Hz does not fit the grid: 1 / (rate x run.time_step) = " << k
-                << " steps, which must be a whole number >= 1 that divides the run's "
-                << total << " steps (e.g. " << 1.0 / h << ", " << 0.1 / h << " or " << 0.001 / h << " Hz)";
+  in.error(key, " = " + SectionReader::text_of(rate) + " Hz does not fit the grid: 1 / (rate x run.time_step) = " +
+                    SectionReader::text_of(k) + " steps, which must be a whole number >= 1 that divides the run's " +
+                    std::to_string(total) + " steps (e.g. " + SectionReader::text_of(1.0 / h) + ", " +
+                    SectionReader::text_of(0.1 / h) + " or " + SectionReader::text_of(0.001 / h) + " Hz)");
   return 0;
 }
 
@@ -154,27 +50,38 @@ BatchSettings parse_batch_settings(const YAML::Node& section, const ModelConfig&
   std::vector<std::string> errors;
   SectionReader in(section, "monte_carlo", errors);
   BatchSettings s;
-  s.mu = in.numbers("mu", 0.0, kMaxFrictionCoefficient, "-");
-  std::set<std::string> names;
-  for (double mu : s.mu) {
-    if (!names.insert(run_name(mu, kKindS1, 0)).second)
-      in.error("mu") << " = " << detail::show(section["mu"]) << " repeats " << mu
-                     << " (values must differ in the 4th decimal, which names the runs)";
+  // A key that is missing or bad keeps its default below; the checks that depend on it are left
+  // out, so each problem is reported once.
+  if (const auto mu = in.numbers("mu", 0.0, kMaxFrictionCoefficient, "-")) {
+    s.mu = *mu;
+    std::set<std::string> names;
+    for (double m : s.mu)
+      if (!names.insert(run_name(m, kKindS1, 0)).second)
+        in.error("mu", " = " + detail::show(section["mu"]) + " repeats " + SectionReader::text_of(m) +
+                           " (values must differ in the 4th decimal, which names the runs)");
   }
-  s.realizations = static_cast<std::uint32_t>(in.number("realizations", 1, 1e6, true, "-"));
-  s.phase_ensemble = in.boolean("phase_ensemble");
-  s.record_rate = in.number("record_rate", 0, 1e9, false, "Hz");
-  if (s.record_rate == 0.0) in.error("record_rate") << " = 0 Hz is out of range; allowed (0, 1 / run.time_step] Hz";
-  s.record_realizations = static_cast<std::uint32_t>(in.number("record_realizations", 0, s.realizations, true, "-"));
-  s.sparse_record_rate = in.number("sparse_record_rate", 0, 1e9, false, "Hz (0 = no series)");
-  record_interval(in, "record_rate", s.record_rate, model);
-  record_interval(in, "sparse_record_rate", s.sparse_record_rate, model);
-  s.output_dir = in.text("output_dir");
-  s.overwrite = in.boolean("overwrite");
-  s.shard_count = static_cast<int>(in.number("shard_count", 1, 1e6, true, "-"));
-  s.shard_index = static_cast<int>(in.number("shard_index", 0, s.shard_count - 1, true, "- (below shard_count)"));
-  s.block_lanes = static_cast<int>(in.number("block_lanes", 1, 4096, true, "lanes"));
-  s.threads = static_cast<int>(in.number("threads", 0, 1024, true, "threads (0 = all cores)"));
+  const auto realizations = in.number("realizations", 1, 1e6, true, "-");
+  if (realizations) s.realizations = static_cast<std::uint32_t>(*realizations);
+  if (const auto v = in.flag("phase_ensemble")) s.phase_ensemble = *v;
+  // record_interval checks that a rate fits the grid (at most one state per step).
+  if (const auto v = in.number("record_rate", 0, 1e9, false, "Hz", /*open_lo=*/true)) {
+    s.record_rate = *v;
+    record_interval(in, "record_rate", s.record_rate, model);
+  }
+  if (const auto v = in.number("record_realizations", 0, realizations ? *realizations : 1e6, true, "-"))
+    s.record_realizations = static_cast<std::uint32_t>(*v);
+  if (const auto v = in.number("sparse_record_rate", 0, 1e9, false, "Hz (0 = no series)")) {
+    s.sparse_record_rate = *v;
+    record_interval(in, "sparse_record_rate", s.sparse_record_rate, model);
+  }
+  if (const auto v = in.text("output_dir")) s.output_dir = *v;
+  if (const auto v = in.flag("overwrite")) s.overwrite = *v;
+  const auto shard_count = in.number("shard_count", 1, 1e6, true, "-");
+  if (shard_count) s.shard_count = static_cast<int>(*shard_count);
+  if (const auto v = in.number("shard_index", 0, shard_count ? *shard_count - 1 : 1e6, true, "- (below shard_count)"))
+    s.shard_index = static_cast<int>(*v);
+  if (const auto v = in.number("block_lanes", 1, 4096, true, "lanes")) s.block_lanes = static_cast<int>(*v);
+  if (const auto v = in.number("threads", 0, 1024, true, "threads (0 = all cores)")) s.threads = static_cast<int>(*v);
   in.finish();
   detail::throw_if_errors(errors);
   return s;

@@ -201,9 +201,14 @@ AnalysisSettings parse_analysis_settings(const YAML::Node& root) {
   s.delta_dot_bins = bins_at(a, "delta_dot_bins", "m/s", errors);
   s.joint_delta_bins = bins_at(a, "joint_delta_bins", "m", errors);
   s.joint_delta_dot_bins = bins_at(a, "joint_delta_dot_bins", "m/s", errors);
-  s.joint_times = number_list(a, "joint_times", 0, "[s], each >= 0", errors);
-  for (double t : s.joint_times)
-    if (t < 0) errors.push_back("analysis.joint_times holds " + std::to_string(t) + " s; allowed >= 0 s");
+  s.joint_times = number_list(a, "joint_times", 0, "in [0, inf) s", errors);
+  for (std::size_t i = 0; i < s.joint_times.size(); ++i)
+    if (s.joint_times[i] < 0) {
+      std::ostringstream e;
+      e.precision(12);
+      e << "analysis.joint_times[" << i << "] = " << s.joint_times[i] << " s is out of range; allowed [0, inf) s";
+      errors.push_back(e.str());
+    }
   if (!errors.empty()) {
     std::string all = "invalid analysis settings:";
     for (const auto& m : errors) all += "\n  " + m;

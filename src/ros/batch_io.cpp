@@ -29,6 +29,16 @@ bool ends_with(const std::string& s, const std::string& tail) {
   return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
 }
 
+// rosbag cannot release a bag whose write failed (e.g. on a full disk): ~Bag closes it again, the
+// close throws again (its LZ4 stream is broken), and an exception out of a destructor ends the
+// process. Such a bag (it stays .active) is kept, unreleased, until the process ends.
+void keep_unreleased(std::unique_ptr<rosbag::Bag> bag) {
+  static std::mutex mutex;
+  static auto* const kept = new std::vector<std::unique_ptr<rosbag::Bag>>();  // never destroyed
+  std::lock_guard<std::mutex> lock(mutex);
+  kept->push_back(std::move(bag));
+}
+
 bool is_manifest(const std::string& file) { return file.rfind("manifest", 0) == 0 && ends_with(file, ".yaml"); }
 
 // Why the folder cannot take this shard of this batch, or "" if it can. Shards of one batch may
@@ -226,6 +236,7 @@ void BagSink::loop() {
     try {
       kv.second.bag->close();
     } catch (...) {
+      keep_unreleased(std::move(kv.second.bag));
     }
   }
   open_.clear();
@@ -235,6 +246,19 @@ void BagSink::loop() {
 }
 
 void BagSink::write(Item& item) {
+  try {
+    write_bag(item);
+  } catch (const std::exception& e) {  // the run's bag stays .active
+    const auto b = open_.find(item.id);
+    if (b == open_.end()) throw;
+    const std::string file = active_path(folder_, b->second.name).string();
+    keep_unreleased(std::move(b->second.bag));
+    open_.erase(b);
+    throw std::runtime_error("cannot write " + file + ": " + e.what());
+  }
+}
+
+void BagSink::write_bag(Item& item) {
   if (auto* open = std::get_if<Open>(&item.what)) {
     OpenBag& b = open_[item.id];
     b.name = open->name;

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numeric>
+#include <tuple>
 #include <utility>
 
 #include "gear_dynamics/ros/conversions.hpp"
@@ -50,6 +51,23 @@ void publish_scalar(const ros::Publisher& pub, double value) {
 
 }  // namespace
 
+void ClampLoggedConfig::__clamp__() {
+  const SimulatorConfig requested = *this;
+  SimulatorConfig::__clamp__();
+  for (const auto& p : __getParamDescriptions__()) {
+    if (p->type != "double") continue;  // every parameter of Simulator.cfg is
+    boost::any asked, used, lo, hi;
+    p->getValue(requested, asked);
+    p->getValue(*this, used);
+    p->getValue(__getMin__(), lo);
+    p->getValue(__getMax__(), hi);
+    const double a = boost::any_cast<double>(asked), u = boost::any_cast<double>(used);
+    if (a != u && !std::isnan(a))
+      ROS_WARN("dynamic_reconfigure: %s = %g is out of range [%g, %g]; clamped to %g", p->name.c_str(), a,
+               boost::any_cast<double>(lo), boost::any_cast<double>(hi), u);
+  }
+}
+
 GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& private_nh)
     : nh_(nh),
       private_nh_(private_nh),
@@ -88,7 +106,7 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
   dynamic_.publish_rate = publish_rate_;
   reconfigure_server_.updateConfig(dynamic_);
   reconfigure_server_.setCallback(
-      [this](SimulatorConfig& config, uint32_t level) { reconfigure(config, level); });
+      [this](ClampLoggedConfig& config, uint32_t level) { reconfigure(config, level); });
 
   updater_.setHardwareID("none");
   updater_.add("simulation", this, &GearSimulator::diagnose);
@@ -143,6 +161,14 @@ GearSimulator::Outcome GearSimulator::request(const Request& r) {
 }
 
 void GearSimulator::reconfigure(SimulatorConfig& config, uint32_t /*level*/) {
+  for (auto [value, kept, name] : {std::tuple{&config.mu, dynamic_.mu, "mu"}, {&config.sigma, dynamic_.sigma, "sigma"},
+                                   {&config.lambda, dynamic_.lambda, "lambda"},
+                                   {&config.real_time_factor, dynamic_.real_time_factor, "real_time_factor"},
+                                   {&config.publish_rate, dynamic_.publish_rate, "publish_rate"}}) {
+    if (!std::isnan(*value)) continue;
+    ROS_WARN("dynamic_reconfigure: %s = nan is not a number; keeping %g", name, kept);
+    *value = kept;
+  }
   if (settings_.deterministic && (config.sigma != 0.0 || config.lambda != 0.0)) {
     ROS_WARN("sigma and lambda stay 0 with the deterministic load (simulator.deterministic: true)");
     config.sigma = 0.0;

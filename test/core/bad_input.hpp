@@ -93,16 +93,21 @@ inline bool is_bool(const YAML::Node& n) {
 // where the range says a sign is meaningless: each with its category.
 inline std::vector<std::pair<std::string, double>> outside(const Range& r, bool integer) {
   std::vector<std::pair<std::string, double>> out;
+  const auto add = [&out](const char* category, double v) {
+    for (const auto& o : out)
+      if (o.second == v) return;
+    out.push_back({category, v});
+  };
   const auto past = [integer](double bound, double dir) {
     return integer ? bound + dir : bound + dir * std::max(std::abs(bound) * 1e-6, 1e-12);
   };
   if (std::isfinite(r.lo)) {
     const double below = r.open_lo ? r.lo : past(r.lo, -1);
-    out.push_back({r.lo >= 0 && below <= 0 ? kNonPositive : kOutOfRange, below});
-    if (r.lo >= 0 && below > -1) out.push_back({kNonPositive, -1.0});
-    if (r.lo > 0) out.push_back({kNonPositive, 0.0});
+    add(r.lo >= 0 && below <= 0 ? kNonPositive : kOutOfRange, below);
+    if (r.lo >= 0) add(kNonPositive, -1.0);
+    if (r.lo > 0) add(kNonPositive, 0.0);
   }
-  if (std::isfinite(r.hi)) out.push_back({kOutOfRange, r.open_hi ? r.hi : past(r.hi, 1)});
+  if (std::isfinite(r.hi)) add(kOutOfRange, r.open_hi ? r.hi : past(r.hi, 1));
   return out;
 }
 
@@ -162,10 +167,16 @@ inline void PrintTo(const Case& c, std::ostream* os) {
 
 // Every number in a message line (with inf and nan), in order.
 inline std::vector<double> numbers_in(const std::string& line) {
-  static const std::regex number(R"([-+]?(?:inf|nan|(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?))");
+  // YAML's spellings (.nan, -.inf) too.
+  static const std::regex number(R"([-+]?(?:\.?(?:inf|nan)(?![a-z_])|(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?))",
+                                 std::regex::icase);
   std::vector<double> out;
-  for (auto it = std::sregex_iterator(line.begin(), line.end(), number); it != std::sregex_iterator(); ++it)
-    out.push_back(std::strtod(it->str().c_str(), nullptr));
+  for (auto it = std::sregex_iterator(line.begin(), line.end(), number); it != std::sregex_iterator(); ++it) {
+    std::string t = it->str();
+    const auto dot = t.find(".i") != std::string::npos ? t.find(".i") : t.find(".n");
+    if (dot != std::string::npos) t.erase(dot, 1);
+    out.push_back(std::strtod(t.c_str(), nullptr));
+  }
   return out;
 }
 

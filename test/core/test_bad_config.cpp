@@ -1,109 +1,218 @@
-// Bad configuration of the model, generated from the schema: for every key of config/gear_pair.yaml,
-// load.yaml and run.yaml the cases of bad_input.hpp (missing, wrong type, NaN, +-inf, a sign or
-// zero where meaningless, just out of range, a typo), each refused with one message that names the
-// key, the value and the schema's range; then the sets that are inconsistent between keys.
+// Bad configuration, generated key by key for every config file: gear_pair.yaml, load.yaml and
+// run.yaml (ranges from the model's schema), monte_carlo.yaml, simulator.yaml and aggregator.yaml
+// (their validators are not schema-driven: each key's range is the one its validator states for a
+// mistyped value). Each case of bad_input.hpp (missing, wrong type, NaN, +-inf, a sign or zero
+// where meaningless, just out of range, a typo) must be refused with one message that names the
+// key, the value and the range. Then the sets that are inconsistent between keys.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 
 #include "bad_input.hpp"
+#include "gear_dynamics/batch.hpp"
+#include "gear_dynamics/batch_analysis.hpp"
 #include "gear_dynamics/config.hpp"
+#include "gear_dynamics/ros/simulator_settings.hpp"
 
 namespace gd = gear_dynamics;
 namespace bi = bad_input;
 
 namespace {
 
-const YAML::Node& defaults() {
-  static const YAML::Node root = [] {
-    const std::string dir = GEAR_DYNAMICS_CONFIG_DIR;
-    return gd::read_yaml_files({dir + "/gear_pair.yaml", dir + "/load.yaml", dir + "/run.yaml"});
+YAML::Node load(const std::vector<std::string>& files) {
+  std::vector<std::string> paths;
+  for (const std::string& f : files) paths.push_back(std::string(GEAR_DYNAMICS_CONFIG_DIR) + "/" + f);
+  return gd::read_yaml_files(paths);
+}
+
+const std::vector<std::string> kModelFiles = {"gear_pair.yaml", "load.yaml", "run.yaml"};
+
+// A validator, the files it reads (in the layout of the launch files) and the section it owns.
+struct Validator {
+  std::string section;
+  std::vector<std::string> files;
+  std::function<void(const YAML::Node&)> parse;
+
+  YAML::Node defaults() const { return load(files); }
+  std::string error_of(const YAML::Node& root) const { return bi::error_of<gd::ConfigError>(parse, root); }
+};
+
+const std::vector<Validator>& validators() {
+  static const std::vector<Validator> all = [] {
+    std::vector<Validator> v;
+    const auto with_model = [](std::string file) {
+      std::vector<std::string> f = kModelFiles;
+      f.push_back(std::move(file));
+      return f;
+    };
+    v.push_back({"model", kModelFiles, [](const YAML::Node& r) { gd::parse_config(r); }});
+    v.push_back({"monte_carlo", with_model("monte_carlo.yaml"),
+                 [](const YAML::Node& r) { gd::parse_batch_settings(r["monte_carlo"], gd::parse_config(r)); }});
+    v.push_back({"simulator", with_model("simulator.yaml"), [](const YAML::Node& r) {
+                   gd::parse_simulator_settings(r, gd::parse_config(r).run.time_step);
+                 }});
+    v.push_back({"analysis", {"aggregator.yaml"}, [](const YAML::Node& r) { gd::parse_analysis_settings(r); }});
+    return v;
   }();
-  return root;
+  return all;
 }
 
-std::string error_of(const YAML::Node& root) {
-  return bi::error_of<gd::ConfigError>([](const YAML::Node& r) { gd::parse_config(r); }, root);
+const Validator& validator(const std::string& section) {
+  for (const Validator& v : validators())
+    if (v.section == section) return v;
+  throw std::logic_error("no validator " + section);
 }
 
-std::vector<bi::Case> schema_cases() {
-  std::vector<bi::Case> all;
-  for (const gd::KeySpec& k : gd::config_schema()) {
-    const bi::Range range{k.lo, k.hi, k.open_lo, k.open_hi};
-    const auto cases = bi::key_cases(k.section, k.key, defaults()[k.section][k.key], range,
-                                     k.kind == gd::KeyKind::Integer);
-    all.insert(all.end(), cases.begin(), cases.end());
+// The range the validator states for `key` when it holds a string where a number belongs (the
+// first element of a list), and whether it asks for an integer.
+std::optional<bi::Range> stated_range(const Validator& v, const std::string& section, const std::string& key,
+                                      bool& integer) {
+  YAML::Node root = v.defaults();
+  const YAML::Node shipped = root[section][key];
+  if (shipped.IsSequence()) {
+    root[section][key][0] = "not_a_number";
+  } else {
+    root[section][key] = "not_a_number";
+  }
+  for (const std::string& line : bi::error_lines(v.error_of(root))) {
+    const auto at = std::min(line.find("allowed"), line.find("expected"));
+    if (!bi::names(line, section + "." + key) || at == std::string::npos) continue;
+    integer = line.find("(integer)", at) != std::string::npos;
+    return bi::stated_range(line.substr(at));
+  }
+  return std::nullopt;
+}
+
+struct Param {
+  std::string validator;
+  bi::Case c;
+};
+
+void PrintTo(const Param& p, std::ostream* os) { bi::PrintTo(p.c, os); }
+
+std::vector<Param> generated_cases() {
+  std::vector<Param> all;
+  const auto add = [&](const std::string& validator, const std::vector<bi::Case>& cases) {
+    for (const bi::Case& c : cases) all.push_back({validator, c});
+  };
+  const Validator& model = validator("model");
+  const YAML::Node model_defaults = model.defaults();
+  for (const gd::KeySpec& k : gd::config_schema())
+    add("model", bi::key_cases(k.section, k.key, model_defaults[k.section][k.key],
+                               bi::Range{k.lo, k.hi, k.open_lo, k.open_hi}, k.kind == gd::KeyKind::Integer));
+  for (const Validator& v : validators()) {
+    if (v.section == "model") continue;
+    const YAML::Node defaults = v.defaults();
+    for (const auto& kv : defaults[v.section]) {
+      const std::string key = kv.first.as<std::string>();
+      const YAML::Node sample = kv.second.IsSequence() && kv.second.size() ? kv.second[0] : kv.second;
+      bool integer = false;
+      const auto range = bi::is_number(sample) ? stated_range(v, v.section, key, integer) : std::nullopt;
+      add(v.section, bi::key_cases(v.section, key, kv.second, range, integer));
+    }
   }
   return all;
 }
 
 }  // namespace
 
-TEST(FaultsSchema, ShippedFilesHoldExactlyTheSchemaKeys) {
+TEST(FaultsSchema, ShippedModelFilesHoldExactlyTheSchemaKeys) {
+  const YAML::Node defaults = validator("model").defaults();
   std::vector<std::string> shipped, schema;
   for (const char* section : {"gear_pair", "load", "run"})
-    for (const auto& kv : defaults()[section]) shipped.push_back(std::string(section) + "." + kv.first.as<std::string>());
+    for (const auto& kv : defaults[section]) shipped.push_back(std::string(section) + "." + kv.first.as<std::string>());
   for (const gd::KeySpec& k : gd::config_schema()) schema.push_back(k.section + "." + k.key);
   std::sort(shipped.begin(), shipped.end());
   std::sort(schema.begin(), schema.end());
   EXPECT_EQ(shipped, schema);
-  EXPECT_EQ(error_of(defaults()), "");
 }
 
-class FaultsModelConfig : public testing::TestWithParam<bi::Case> {};
+TEST(FaultsSchema, ShippedFilesAreAccepted) {
+  for (const Validator& v : validators()) EXPECT_EQ(v.error_of(v.defaults()), "") << v.section;
+}
 
-TEST_P(FaultsModelConfig, RefusedNamingKeyValueAndRange) {
-  const bi::Case& c = GetParam();
-  YAML::Node root = YAML::Clone(defaults());
+class FaultsConfig : public testing::TestWithParam<Param> {};
+
+TEST_P(FaultsConfig, RefusedNamingKeyValueAndRange) {
+  const Validator& v = validator(GetParam().validator);
+  const bi::Case& c = GetParam().c;
+  YAML::Node root = v.defaults();
   c.apply(root);
-  EXPECT_EQ(bi::judge(c, error_of(root)), "");
+  EXPECT_EQ(bi::judge(c, v.error_of(root)), "");
 }
 
-INSTANTIATE_TEST_SUITE_P(Generated, FaultsModelConfig, testing::ValuesIn(schema_cases()),
-                         [](const testing::TestParamInfo<bi::Case>& info) { return info.param.name(); });
+INSTANTIATE_TEST_SUITE_P(Generated, FaultsConfig, testing::ValuesIn(generated_cases()),
+                         [](const testing::TestParamInfo<Param>& info) { return info.param.c.name(); });
 
-// Sets of values each in range that do not fit together; the message names the key and value.
+// Sets of values, each in range, that do not fit together; the one message names key and value.
 struct Inconsistent {
-  std::string name, overlay;
+  std::string name, validator, overlay;
   std::vector<std::string> expected;  // substrings of the one error line
 };
 
 void PrintTo(const Inconsistent& c, std::ostream* os) { *os << c.overlay; }
 
-class FaultsModelConsistency : public testing::TestWithParam<Inconsistent> {};
+class FaultsConsistency : public testing::TestWithParam<Inconsistent> {};
 
-TEST_P(FaultsModelConsistency, RefusedNamingKeyAndValue) {
-  YAML::Node root = YAML::Clone(defaults());
+TEST_P(FaultsConsistency, RefusedNamingKeyAndValue) {
+  const Validator& v = validator(GetParam().validator);
+  YAML::Node root = v.defaults();
   gd::merge_yaml(root, YAML::Load(GetParam().overlay));
-  const std::string e = error_of(root);
+  const std::string e = v.error_of(root);
   const auto lines = bi::error_lines(e);
   ASSERT_EQ(lines.size(), 1u) << e;
-  for (const std::string& s : GetParam().expected) EXPECT_NE(lines[0].find(s), std::string::npos) << lines[0] << "\nmissing: " << s;
+  for (const std::string& s : GetParam().expected)
+    EXPECT_NE(lines[0].find(s), std::string::npos) << lines[0] << "\nmissing: " << s;
 }
 
 INSTANTIATE_TEST_SUITE_P(
-    Generated, FaultsModelConsistency,
+    Generated, FaultsConsistency,
     testing::Values(
-        Inconsistent{"inconsistent__contact_ratio_below_1", "{gear_pair: {addendum_coefficient: 0.3}}",
+        Inconsistent{"inconsistent__contact_ratio_below_1", "model", "{gear_pair: {addendum_coefficient: 0.3}}",
                      {"contact ratio 0.5", "addendum_coefficient = 0.3", "outside (1, 2)"}},
-        Inconsistent{"inconsistent__contact_ratio_above_2", "{gear_pair: {addendum_coefficient: 2.0, pinion_teeth: 60, gear_teeth: 240}}",
+        Inconsistent{"inconsistent__contact_ratio_above_2", "model",
+                     "{gear_pair: {addendum_coefficient: 2.0, pinion_teeth: 60, gear_teeth: 240}}",
                      {"contact ratio", "addendum_coefficient = 2", "outside (1, 2)"}},
-        Inconsistent{"inconsistent__time_step_too_large_for_stiffest_contact", "{run: {time_step: 5.0e-5, duration: 0.4}}",
+        Inconsistent{"inconsistent__time_step_too_large_for_stiffest_contact", "model", "{run: {time_step: 5.0e-5}}",
                      {"run.time_step = 5e-05 s is too large for the stiffest contact", "omega_max h < 2.828"}},
-        Inconsistent{"inconsistent__time_step_spans_stiffness_interval", "{gear_pair: {pinion_speed: 10000}, run: {time_step: 2.0e-5}}",
+        Inconsistent{"inconsistent__time_step_spans_stiffness_interval", "model",
+                     "{gear_pair: {pinion_speed: 10000}, run: {time_step: 2.0e-5}}",
                      {"run.time_step = 2e-05 s spans a whole stiffness interval", "allowed time_step <"}},
-        Inconsistent{"inconsistent__duration_not_whole_steps", "{run: {duration: 0.4000005}}",
+        Inconsistent{"inconsistent__duration_not_whole_steps", "model", "{run: {duration: 0.4000005}}",
                      {"run.duration = 0.4000005 s is not a whole number of time steps"}},
-        Inconsistent{"inconsistent__window_longer_than_duration", "{run: {window: 0.5}}",
+        Inconsistent{"inconsistent__window_longer_than_duration", "model", "{run: {window: 0.5}}",
                      {"run.window = 0.5 s is out of range", "(0, duration = 0.4] s"}},
-        Inconsistent{"inconsistent__snapshot_off_grid", "{run: {snapshot_times: [0.3, 0.3000005]}}",
+        Inconsistent{"inconsistent__snapshot_off_grid", "model", "{run: {snapshot_times: [0.3, 0.3000005]}}",
                      {"run.snapshot_times[1] = 0.3000005 s is not a grid time", "[0, duration = 0.4]"}},
-        Inconsistent{"inconsistent__snapshot_after_duration", "{run: {snapshot_times: [0.3, 0.5]}}",
+        Inconsistent{"inconsistent__snapshot_after_duration", "model", "{run: {snapshot_times: [0.3, 0.5]}}",
                      {"run.snapshot_times[1] = 0.5 s is not a grid time", "[0, duration = 0.4]"}},
-        Inconsistent{"inconsistent__snapshots_not_increasing", "{run: {snapshot_times: [0.35, 0.3]}}",
+        Inconsistent{"inconsistent__snapshots_not_increasing", "model", "{run: {snapshot_times: [0.35, 0.3]}}",
                      {"run.snapshot_times[1] = 0.3 s is not after the previous one"}},
-        Inconsistent{"inconsistent__mesh_phase_beyond_period", "{gear_pair: {mesh_phase: 0.4}}",
+        Inconsistent{"inconsistent__mesh_phase_beyond_period", "model", "{gear_pair: {mesh_phase: 0.4}}",
                      {"gear_pair.mesh_phase = 0.4 is out of range", "[0, 0.314159"}},
-        Inconsistent{"inconsistent__fine_tolerance_above_tolerance", "{run: {steady_state_tolerance_fine: 0.2}}",
-                     {"run.steady_state_tolerance_fine = 0.2 is above run.steady_state_tolerance = 0.1"}}),
+        Inconsistent{"inconsistent__fine_tolerance_above_tolerance", "model", "{run: {steady_state_tolerance_fine: 0.2}}",
+                     {"run.steady_state_tolerance_fine = 0.2 is above run.steady_state_tolerance = 0.1"}},
+        Inconsistent{"inconsistent__empty_mu_list", "monte_carlo", "{monte_carlo: {mu: []}}",
+                     {"monte_carlo.mu = []", "non-empty list", "[0, 0.2]"}},
+        Inconsistent{"inconsistent__no_realizations", "monte_carlo", "{monte_carlo: {realizations: 0}}",
+                     {"monte_carlo.realizations = 0", "[1, 1000000]"}},
+        Inconsistent{"inconsistent__mu_repeated", "monte_carlo", "{monte_carlo: {mu: [0.04, 0.04]}}",
+                     {"monte_carlo.mu = [0.04, 0.04] repeats 0.04"}},
+        Inconsistent{"inconsistent__more_recorded_than_realizations", "monte_carlo",
+                     "{monte_carlo: {realizations: 4, record_realizations: 5}}",
+                     {"monte_carlo.record_realizations = 5", "[0, 4]"}},
+        Inconsistent{"inconsistent__record_rate_off_grid", "monte_carlo", "{monte_carlo: {record_rate: 300000.0}}",
+                     {"monte_carlo.record_rate = 300000 Hz does not fit the grid"}},
+        Inconsistent{"inconsistent__shard_index_beyond_count", "monte_carlo", "{monte_carlo: {shard_index: 2, shard_count: 2}}",
+                     {"monte_carlo.shard_index = 2", "[0, 1]"}},
+        Inconsistent{"inconsistent__simulator_t_end_off_grid", "simulator", "{simulator: {t_end: 0.1000005}}",
+                     {"simulator.t_end = 0.1000005 s is not a whole number of time steps"}},
+        Inconsistent{"inconsistent__simulator_publish_rate_above_grid", "simulator", "{simulator: {publish_rate: 2.0e6}}",
+                     {"simulator.publish_rate = 2000000", "at most 1/time_step"}},
+        Inconsistent{"inconsistent__simulator_loop_forever", "simulator", "{simulator: {loop: true, t_end: 0}}",
+                     {"simulator.loop = true needs simulator.t_end > 0"}},
+        Inconsistent{"inconsistent__analysis_empty_interval", "analysis", "{analysis: {delta_interval: [5.5e-5, 4.0e-5]}}",
+                     {"analysis.delta_interval = [5.5e-05, 4e-05] is empty"}},
+        Inconsistent{"inconsistent__analysis_bins_width_zero", "analysis", "{analysis: {delta_bins: [3.0e-5, 6.0e-5, 0.0]}}",
+                     {"analysis.delta_bins"}}),
     [](const testing::TestParamInfo<Inconsistent>& info) { return info.param.name; });

@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
+#include <sys/resource.h>
 
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -255,4 +257,39 @@ TEST(BatchBags, AbandonedRunsStayActive) {
   EXPECT_EQ(active, 2u);
   // Resuming finishes exactly the rest.
   EXPECT_EQ(run_batch(model, s).size(), runs.size() - done);
+}
+
+// A write that fails (the file size limit here, as a full disk in the fault suite) ends the batch
+// with the error: the process does not abort (rosbag's destructor retries a failed close, and a
+// throw out of it would terminate), finished bags are complete, the others stay .active, and a
+// resume once writing works again completes the batch.
+TEST(BatchBags, FailedWritesEndTheBatchWithAnErrorNotACrash) {
+  TempDir dir;
+  const gd::ModelConfig model = short_model();
+  const gd::BatchSettings s = small_batch(dir.path.string());
+  const auto runs = gd::plan_runs(model, s);
+  rlimit saved{};
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &saved), 0);
+  const auto old_handler = std::signal(SIGXFSZ, SIG_IGN);  // the write fails with EFBIG instead
+  rlimit small = saved;
+  small.rlim_cur = 16 * 1024;  // [bytes] the sparse runs' bags fit, the densely recorded ones do not
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
+  std::string error;
+  try {
+    run_batch(model, s);
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  setrlimit(RLIMIT_FSIZE, &saved);
+  std::signal(SIGXFSZ, old_handler);
+  EXPECT_NE(error.find("cannot write " + dir.path.string() + "/mu0."), std::string::npos) << error;
+  std::size_t complete = 0;
+  for (const gd::RunSpec& r : runs) {
+    const fs::path bag = dir.path / (r.name + ".bag");
+    if (!fs::exists(bag)) continue;
+    EXPECT_TRUE(gd::bag_complete(bag.string(), gd::run_info(model, r))) << bag;
+    ++complete;
+  }
+  EXPECT_LT(complete, runs.size());
+  EXPECT_EQ(run_batch(model, s).size(), runs.size() - complete);
 }

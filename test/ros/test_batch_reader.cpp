@@ -242,6 +242,44 @@ TEST_F(BatchReader, BadBagsAreSkippedNamedAndCounted) {
   EXPECT_EQ(msg.friction.at(1).phase_runs, 3u);
 }
 
+// rosbag trusts the message offsets of a bag's index records; one pointing past its chunk makes
+// it read out of bounds (SIGSEGV, found by the fault suite's random byte flips). The reader reads
+// bags in a child process, so such a bag is skipped and the rest is read.
+TEST_F(BatchReader, BagWhoseIndexCrashesRosbagIsSkipped) {
+  const auto runs = all_runs();
+  const fs::path a = root_ / "a";
+  write_batch(a, runs, config_);
+  const fs::path damaged = a / (runs.front().name + ".bag");
+  {  // The first index data record (op 0x04): its first entry's offset (time 8 bytes, offset 4).
+    std::fstream io(damaged, std::ios::in | std::ios::out | std::ios::binary);
+    const auto u32 = [&](std::streamoff at) {
+      std::uint32_t v = 0;
+      io.seekg(at);
+      io.read(reinterpret_cast<char*>(&v), 4);
+      return static_cast<std::streamoff>(v);
+    };
+    std::streamoff pos = 13;  // after "#ROSBAG V2.0\n": records of header length, header, data length, data
+    bool found = false;
+    while (!found && pos < static_cast<std::streamoff>(fs::file_size(damaged))) {
+      const std::streamoff header = u32(pos), data = pos + 4 + header + 4;
+      std::string h(static_cast<std::size_t>(header), '\0');
+      io.seekg(pos + 4);
+      io.read(h.data(), header);
+      found = h.find(std::string("op=\x04", 4)) != std::string::npos && u32(data - 4) >= 12;
+      if (found) {
+        const std::uint32_t past_the_chunk = 0xfffffff0u;
+        io.seekp(data + 8);
+        io.write(reinterpret_cast<const char*>(&past_the_chunk), 4);
+      }
+      pos = data + u32(data - 4);
+    }
+    ASSERT_TRUE(found);
+  }
+  const gd::BatchInputs in = gd::read_batches({a.string()});
+  EXPECT_EQ(in.runs.size(), runs.size() - 1);
+  EXPECT_HAS(reason_for(in, damaged), "crashed the bag reader");
+}
+
 TEST_F(BatchReader, FoldersWithoutUsableBagsAreErrors) {
   const auto error_of = [](const std::vector<std::string>& folders) {
     try {

@@ -89,6 +89,7 @@ class BagSink : public BatchSink {
   void push(std::vector<Item>&& items);
   void loop();
   void write(Item& item);
+  void write_bag(Item& item);
 
   ModelConfig model_;
   std::string folder_;

@@ -27,6 +27,15 @@
 
 namespace gear_dynamics {
 
+// The reconfigure server clamps every request into Simulator.cfg's ranges, silently; with this
+// Config it logs each value the clamp changes. NaN passes the clamp (comparisons with NaN are
+// false): GearSimulator::reconfigure keeps the value in effect instead.
+struct ClampLoggedConfig : SimulatorConfig {
+  ClampLoggedConfig() = default;
+  ClampLoggedConfig(const SimulatorConfig& c) : SimulatorConfig(c) {}  // the server converts its defaults
+  void __clamp__();
+};
+
 class GearSimulator {
  public:
   // Reads and validates the private parameters (config/*.yaml); throws ConfigError naming the
@@ -126,7 +135,7 @@ class GearSimulator {
       run_info_pub_;
   ros::ServiceServer pause_srv_, unpause_srv_, reset_srv_, step_srv_;
   boost::recursive_mutex reconfigure_mutex_;
-  dynamic_reconfigure::Server<SimulatorConfig> reconfigure_server_;
+  dynamic_reconfigure::Server<ClampLoggedConfig> reconfigure_server_;
   diagnostic_updater::Updater updater_;
   ros::WallTimer diagnostics_timer_;
 

@@ -1,0 +1,99 @@
+#!/usr/bin/python3
+"""Bad parameters through the nodes: each node is started with its config files' parameters, one
+of them broken (missing, wrong type, NaN, +-inf, a misspelt key), and must exit non-zero, before
+doing any work, with the key in its log. The keys come from the config files themselves.
+
+By default every key is broken once, in one of the ways (rotating), through one node that reads it
+(the model's keys alternate between gear_simulator and gear_monte_carlo); --slow breaks every key
+in every way through every node that reads it."""
+import concurrent.futures
+import copy
+import os
+import tempfile
+
+import faultlib as fl
+
+MODEL = ("gear_pair.yaml", "load.yaml", "run.yaml")
+NODES = {  # executable: (config files, extra parameters)
+    "gear_simulator": (MODEL + ("simulator.yaml",), {}),
+    "gear_monte_carlo": (MODEL + ("monte_carlo.yaml",), {}),
+    "gear_aggregator": (("aggregator.yaml",), {"folders": "/nonexistent_batch", "exit_when_done": True}),
+}
+NODE_TIMEOUT = 30.0
+
+
+def breakages(value):
+    """(category, description, new value or None to remove) for a parameter's shipped value."""
+    out = [("missing", "removed", None)]
+    sample = value[0] if isinstance(value, list) and value else value
+    if isinstance(sample, bool):
+        bad = [("wrong_type", "a string", "maybe")]
+    elif isinstance(sample, (int, float)):
+        bad = [("wrong_type", "a string", "not_a_number"), ("nan", "NaN", float("nan")),
+               ("inf", "+inf", float("inf")), ("inf", "-inf", float("-inf"))]
+    else:
+        bad = [("wrong_type", "a map", {"a": 1})]
+    for category, what, v in bad:
+        if isinstance(value, list) and value:
+            out.append((category, "[0] = " + what, [v] + value[1:]))
+        else:
+            out.append((category, what, v))
+    return out
+
+
+def cases(slow):
+    """(node, section, key, category, description, params) for every case to run."""
+    out = []
+    model_keys = [(s, k) for s, keys in fl.load_yaml(*[fl.config_file(f) for f in MODEL]).items() for k in keys]
+    for node, (files, extra) in NODES.items():
+        params = fl.load_yaml(*[fl.config_file(f) for f in files])
+        params.update(extra)
+        for section in [s for s in params if isinstance(params[s], dict)]:
+            for i, key in enumerate(params[section]):
+                if (section, key) in model_keys and not slow and \
+                        ["gear_simulator", "gear_monte_carlo"][model_keys.index((section, key)) % 2] != node:
+                    continue
+                found = breakages(params[section][key])
+                chosen = found if slow else [found[(len(out) + i) % len(found)]]
+                for category, what, value in chosen:
+                    p = copy.deepcopy(params)
+                    if value is None:
+                        del p[section][key]
+                    else:
+                        p[section][key] = value
+                    out.append((node, section, key, category, what, p))
+            p = copy.deepcopy(params)
+            first = next(iter(p[section]))
+            p[section][first + "x"] = p[section][first]
+            out.append((node, section, first + "x", "unknown_key", "a misspelt key", p))
+    return out
+
+
+def run(suite):
+    with tempfile.TemporaryDirectory(prefix="gd_node_params_") as cwd:
+        todo = cases(suite.args.slow)
+        for node, section, key, category, what, params in todo:
+            if node == "gear_monte_carlo" and key != "output_dir":
+                params["monte_carlo"]["output_dir"] = os.path.join(cwd, "batch")  # never written: refused first
+
+        def start(case):
+            node, _, _, _, _, params = case
+            return fl.run_node(node, fl.node_name(node), params, timeout=NODE_TIMEOUT)
+
+        # A node that refuses its parameters spends its time registering with the master, not on a
+        # core: several at once.
+        with concurrent.futures.ThreadPoolExecutor(4) as pool:
+            results = list(pool.map(start, todo))
+        for (node, section, key, category, what, _), (code, out) in zip(todo, results):
+            with suite.case("node_" + category, "%s__%s_%s" % (node, section, key)):
+                path = "%s.%s" % (section, key)
+                assert code not in (0, None) and not fl.died_of_signal(code), \
+                    "%s with %s = %s: exit %s (expected an error exit):\n%s" % (node, path, what, code, out[-3000:])
+                assert path in out, "%s with %s = %s: the log does not name %s:\n%s" % (
+                    node, path, what, path, out[-3000:])
+        with suite.case("node_missing", "gear_monte_carlo__no_batch_folder_created"):
+            assert not os.path.exists(os.path.join(cwd, "batch")), "a refused batch created its folder"
+
+
+if __name__ == "__main__":
+    fl.main(run)
