@@ -55,7 +55,7 @@ def executable(name):
 
 class Suite:
     """Cases grouped by category; prints a table and writes a JUnit file (one testcase per case,
-    classname faults.<category>), which scripts/fault_summary.py totals over the whole suite."""
+    classname faults.<category>), which test/faults/summary.py totals over the whole suite."""
 
     def __init__(self, name, argv=None):
         import argparse

@@ -6,6 +6,7 @@ clamped into range (NaN: the value in effect is kept), the node must log the cha
 parameter, and it must keep running: states still arrive, carrying the clamped mu and sigma."""
 import math
 import subprocess
+import tempfile
 import time
 
 import faultlib as fl
@@ -61,12 +62,21 @@ def run(suite):
     params["simulator"].update(SIMULATOR)
     node = fl.node_name("simulator")
     watch = Watch(node)
-    process = fl.start_node("gear_simulator", node, params)
+    log = tempfile.TemporaryFile("w+")
+    process = fl.start_node("gear_simulator", node, params, output=log)
+
+    def node_output():
+        log.seek(0)
+        return log.read()[-5000:]
+
     try:
         client = dynamic_reconfigure.client.Client("/" + node, timeout=TIMEOUT)
         initial = client.get_configuration(timeout=TIMEOUT)
+        assert initial is not None, "no configuration from gear_simulator within %g s:\n%s" % (TIMEOUT, node_output())
         current = dict(initial)  # in effect, as the server last answered
         for param, how, value, expected in requests(client.get_parameter_descriptions()):
+            if process.poll() is not None:
+                raise AssertionError("gear_simulator ended (exit %s):\n%s" % (process.returncode, node_output()))
             with suite.case("reconfigure_out_of_range", param + "_" + how):
                 logs = len(watch.logs)
                 want = current[param] if expected is None else expected

@@ -15,7 +15,7 @@ REQUIRED = ["config_missing", "config_wrong_type", "config_nan", "config_inf", "
             "config_out_of_range", "config_unknown_key", "config_inconsistent", "node_missing", "node_wrong_type",
             "node_nan", "node_inf", "node_unknown_key", "batch_signal", "batch_unwritable", "batch_disk_full",
             "bag_truncated", "bag_bytes_flipped", "bag_other_type", "bag_zero_length", "bag_is_directory",
-            "reconfigure_out_of_range"]
+            "reconfigure_out_of_range", "sanitizer_address", "sanitizer_thread"]
 
 
 def category(testcase):
