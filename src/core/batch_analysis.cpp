@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <set>
 #include <sstream>
@@ -9,6 +10,7 @@
 
 #include "gear_dynamics/batch.hpp"
 #include "gear_dynamics/config.hpp"
+#include "gear_dynamics/section_reader.hpp"
 
 namespace gear_dynamics {
 
@@ -16,62 +18,7 @@ namespace {
 
 // Snapshot times and requested joint times are both whole multiples of h computed in double.
 constexpr double kTimeMatch = 1e-9;  // [s]
-
-std::string show(const YAML::Node& n) {
-  YAML::Emitter e;
-  e << YAML::Flow << n;
-  return e.c_str();
-}
-
-// A list of `size` numbers (size 0: any non-empty length) at analysis.<key>.
-std::vector<double> number_list(const YAML::Node& section, const std::string& key, std::size_t size,
-                                const std::string& meaning, std::vector<std::string>& errors) {
-  const std::string path = "analysis." + key;
-  const YAML::Node v = section[key];
-  const std::string expected = size ? "a list of " + std::to_string(size) + " numbers " + meaning
-                                    : "a non-empty list of numbers " + meaning;
-  if (!v || !v.IsSequence() || (size && v.size() != size) || v.size() == 0) {
-    errors.push_back(path + (v ? " = " + show(v) + " has the wrong form" : " is missing") + "; expected " + expected);
-    return {};
-  }
-  std::vector<double> out;
-  for (const auto& item : v) {
-    try {
-      const double x = item.as<double>();
-      if (!std::isfinite(x)) throw YAML::Exception(YAML::Mark(), "not finite");
-      out.push_back(x);
-    } catch (const YAML::Exception&) {
-      errors.push_back(path + " = " + show(v) + " holds " + show(item) + ", not a finite number; expected " + expected);
-      return {};
-    }
-  }
-  return out;
-}
-
-Interval interval_at(const YAML::Node& section, const std::string& key, const char* unit,
-                     std::vector<std::string>& errors) {
-  const auto v = number_list(section, key, 2, std::string("[lo, hi] with lo <= hi [") + unit + "]", errors);
-  if (v.empty()) return {};
-  if (!(v[0] <= v[1])) {
-    std::ostringstream e;
-    e << "analysis." << key << " = [" << v[0] << ", " << v[1] << "] is empty; allowed lo <= hi [" << unit << "]";
-    errors.push_back(e.str());
-  }
-  return {v[0], v[1]};
-}
-
-BinSpec bins_at(const YAML::Node& section, const std::string& key, const char* unit,
-                std::vector<std::string>& errors) {
-  const auto v = number_list(section, key, 3, std::string("[lo, hi, width] [") + unit + "]", errors);
-  if (v.empty()) return {};
-  const BinSpec spec{v[0], v[1], v[2]};
-  try {
-    validate(spec, "analysis." + key);
-  } catch (const std::invalid_argument& ex) {
-    errors.emplace_back(ex.what());
-  }
-  return spec;
-}
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
 std::size_t snapshot_index(const RunRecord& r, double t) {
   for (std::size_t k = 0; k < r.snapshot_times.size(); ++k)
@@ -174,46 +121,38 @@ std::optional<RunKind> run_kind_from(const std::string& text) {
 
 AnalysisSettings parse_analysis_settings(const YAML::Node& root) {
   const YAML::Node a = root["analysis"];
-  if (!a || !a.IsMap()) throw ConfigError("invalid analysis settings: missing section 'analysis' (a map)");
-  static const std::set<std::string> known = {"confidence", "delta_interval", "delta_dot_interval", "delta_bins",
-                                              "delta_dot_bins", "joint_delta_bins", "joint_delta_dot_bins", "joint_times"};
+  if (!a || !a.IsMap()) throw ConfigError("invalid configuration: missing section 'analysis' (a map)");
   std::vector<std::string> errors;
-  for (const auto& kv : a) {
-    const std::string key = kv.first.as<std::string>();
-    if (!known.count(key)) {
-      std::string valid;
-      for (const auto& k : known) valid += (valid.empty() ? "" : ", ") + k;
-      errors.push_back("analysis." + key + " is not a known key (a typo?); valid keys: " + valid);
-    }
-  }
+  SectionReader in(a, "analysis", errors);
   AnalysisSettings s;
-  try {
-    s.confidence = a["confidence"].as<double>();
-  } catch (const YAML::Exception&) {
-    s.confidence = -1.0;  // missing or not a number: reported as out of range
-  }
-  if (!(s.confidence > 0.0 && s.confidence < 1.0))
-    errors.push_back("analysis.confidence = " + (a["confidence"] ? show(a["confidence"]) : std::string("(missing)")) +
-                     " is out of range; allowed (0, 1)");
-  s.delta_interval = interval_at(a, "delta_interval", "m", errors);
-  s.delta_dot_interval = interval_at(a, "delta_dot_interval", "m/s", errors);
-  s.delta_bins = bins_at(a, "delta_bins", "m", errors);
-  s.delta_dot_bins = bins_at(a, "delta_dot_bins", "m/s", errors);
-  s.joint_delta_bins = bins_at(a, "joint_delta_bins", "m", errors);
-  s.joint_delta_dot_bins = bins_at(a, "joint_delta_dot_bins", "m/s", errors);
-  s.joint_times = number_list(a, "joint_times", 0, "in [0, inf) s", errors);
-  for (std::size_t i = 0; i < s.joint_times.size(); ++i)
-    if (s.joint_times[i] < 0) {
-      std::ostringstream e;
-      e.precision(12);
-      e << "analysis.joint_times[" << i << "] = " << s.joint_times[i] << " s is out of range; allowed [0, inf) s";
-      errors.push_back(e.str());
+  if (const auto v = in.number("confidence", 0, 1, false, "-", /*open_lo=*/true, /*open_hi=*/true)) s.confidence = *v;
+  const auto interval = [&](const char* key, const std::string& unit, Interval& out) {
+    const auto v = in.numbers(key, -kInf, kInf, unit, 2);
+    if (!v) return;
+    out = {(*v)[0], (*v)[1]};
+    if (!(out.lo <= out.hi))
+      in.error(key, " = [" + SectionReader::text_of(out.lo) + ", " + SectionReader::text_of(out.hi) +
+                        "] is empty; allowed lo <= hi, in " + unit);
+  };
+  const auto bins = [&](const char* key, const std::string& unit, BinSpec& out) {
+    const auto v = in.numbers(key, -kInf, kInf, unit + " ([lo, hi, width])", 3);
+    if (!v) return;
+    out = {(*v)[0], (*v)[1], (*v)[2]};
+    try {
+      validate(out, std::string("analysis.") + key);
+    } catch (const std::invalid_argument& ex) {
+      errors.emplace_back(ex.what());
     }
-  if (!errors.empty()) {
-    std::string all = "invalid analysis settings:";
-    for (const auto& m : errors) all += "\n  " + m;
-    throw ConfigError(all);
-  }
+  };
+  interval("delta_interval", "m", s.delta_interval);
+  interval("delta_dot_interval", "m/s", s.delta_dot_interval);
+  bins("delta_bins", "m", s.delta_bins);
+  bins("delta_dot_bins", "m/s", s.delta_dot_bins);
+  bins("joint_delta_bins", "m", s.joint_delta_bins);
+  bins("joint_delta_dot_bins", "m/s", s.joint_delta_dot_bins);
+  if (const auto v = in.numbers("joint_times", 0, kInf, "s")) s.joint_times = *v;
+  in.finish();
+  detail::throw_if_errors(errors);
   return s;
 }
 

@@ -17,6 +17,16 @@ std::string SectionReader::text_of(double x) {
   return s.str();
 }
 
+namespace {
+
+// "[lo, hi] unit"; an infinite bound is never included.
+std::string range_text(double lo, double hi, bool open_lo, bool open_hi, bool integer, const std::string& unit) {
+  return ((open_lo || std::isinf(lo)) ? "(" : "[") + SectionReader::text_of(lo) + ", " + SectionReader::text_of(hi) +
+         ((open_hi || std::isinf(hi)) ? ")" : "]") + (integer ? " (integer) " : " ") + unit;
+}
+
+}  // namespace
+
 std::optional<YAML::Node> SectionReader::get(const char* key, const std::string& allowed) {
   read_.insert(key);
   const YAML::Node v = section_.IsMap() ? section_[key] : YAML::Node();
@@ -28,15 +38,14 @@ std::optional<YAML::Node> SectionReader::get(const char* key, const std::string&
 }
 
 std::optional<double> SectionReader::number(const char* key, double lo, double hi, bool integer,
-                                            const std::string& unit, bool open_lo) {
-  const std::string range = (open_lo ? "(" : "[") + text_of(lo) + ", " + text_of(hi) + "]" +
-                            (integer ? " (integer) " : " ") + unit;
+                                            const std::string& unit, bool open_lo, bool open_hi) {
+  const std::string range = range_text(lo, hi, open_lo, open_hi, integer, unit);
   const auto v = get(key, "allowed " + range);
   if (!v) return std::nullopt;
   double x;
   if (!detail::as_number(*v, x)) {
     error(key, " = " + detail::show(*v) + " has the wrong type: expected a number in " + range);
-  } else if (!std::isfinite(x) || (open_lo ? x <= lo : x < lo) || x > hi) {
+  } else if (!std::isfinite(x) || (open_lo ? x <= lo : x < lo) || (open_hi ? x >= hi : x > hi)) {
     error(key, " = " + text_of(x) + " is out of range; allowed " + range);
   } else if (integer && x != std::floor(x)) {
     error(key, " = " + text_of(x) + " is not an integer; allowed " + range);
@@ -62,12 +71,14 @@ std::optional<std::string> SectionReader::text(const char* key) {
 }
 
 std::optional<std::vector<double>> SectionReader::numbers(const char* key, double lo, double hi,
-                                                          const std::string& unit) {
-  const std::string range = "[" + text_of(lo) + ", " + text_of(hi) + "] " + unit;
-  const auto v = get(key, "expected a non-empty list of numbers in " + range);
+                                                          const std::string& unit, std::size_t size) {
+  const std::string range = range_text(lo, hi, false, false, false, unit);
+  const std::string expected =
+      (size ? "a list of " + std::to_string(size) + " numbers in " : "a non-empty list of numbers in ") + range;
+  const auto v = get(key, "expected " + expected);
   if (!v) return std::nullopt;
-  if (!v->IsSequence() || v->size() == 0) {
-    error(key, " = " + detail::show(*v) + " is not allowed: expected a non-empty list of numbers in " + range);
+  if (!v->IsSequence() || v->size() == 0 || (size && v->size() != size)) {
+    error(key, " = " + detail::show(*v) + " is not allowed: expected " + expected);
     return std::nullopt;
   }
   std::vector<double> out;
