@@ -19,6 +19,10 @@ import yaml
 
 from catkin.find_in_workspaces import find_in_workspaces
 
+# The rostests' helpers (test/ros/simtest.py), shared rather than written again.
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "ros"))
+from simtest import read_csv, wait_until  # noqa: E402,F401  (re-exported for the fault scripts)
+
 PACKAGE = "gear_dynamics"
 
 
@@ -230,12 +234,6 @@ def summaries(folder):
     """{bag name: raw bytes of its RunSummary} of the finished bags of a folder."""
     return {b: [m for t, m in check_run_bag(os.path.join(folder, b)) if t == "/gear/summary"][0]
             for b in bags(folder)}
-
-
-def read_csv(path):
-    import csv
-    with open(path) as f:
-        return list(csv.DictReader(f))
 
 
 def run_aggregator(folder, report, joint_times, timeout=120):
