@@ -6,8 +6,8 @@
 #include <cmath>
 #include <cstdio>
 #include <numeric>
-#include <tuple>
 #include <utility>
+#include <vector>
 
 #include "gear_dynamics/ros/conversions.hpp"
 
@@ -49,22 +49,25 @@ void publish_scalar(const ros::Publisher& pub, double value) {
   pub.publish(m);
 }
 
+// Simulator.cfg's double parameters (all of them) as (name, field), from the generated description.
+std::vector<std::pair<std::string, double SimulatorConfig::*>> double_parameters() {
+  std::vector<std::pair<std::string, double SimulatorConfig::*>> out;
+  for (const auto& p : SimulatorConfig::__getParamDescriptions__())
+    if (const auto* d = dynamic_cast<const SimulatorConfig::ParamDescription<double>*>(p.get()))
+      out.emplace_back(d->name, d->field);
+  return out;
+}
+
 }  // namespace
 
 void ClampLoggedConfig::__clamp__() {
   const SimulatorConfig requested = *this;
   SimulatorConfig::__clamp__();
-  for (const auto& p : __getParamDescriptions__()) {
-    if (p->type != "double") continue;  // every parameter of Simulator.cfg is
-    boost::any asked, used, lo, hi;
-    p->getValue(requested, asked);
-    p->getValue(*this, used);
-    p->getValue(__getMin__(), lo);
-    p->getValue(__getMax__(), hi);
-    const double a = boost::any_cast<double>(asked), u = boost::any_cast<double>(used);
-    if (a != u && !std::isnan(a))
-      ROS_WARN("dynamic_reconfigure: %s = %g is out of range [%g, %g]; clamped to %g", p->name.c_str(), a,
-               boost::any_cast<double>(lo), boost::any_cast<double>(hi), u);
+  for (const auto& [name, field] : double_parameters()) {
+    const double asked = requested.*field, used = this->*field;
+    if (asked != used && !std::isnan(asked))
+      ROS_WARN("dynamic_reconfigure: %s = %g is out of range [%g, %g]; clamped to %g", name.c_str(), asked,
+               __getMin__().*field, __getMax__().*field, used);
   }
 }
 
@@ -161,13 +164,10 @@ GearSimulator::Outcome GearSimulator::request(const Request& r) {
 }
 
 void GearSimulator::reconfigure(SimulatorConfig& config, uint32_t /*level*/) {
-  for (auto [value, kept, name] : {std::tuple{&config.mu, dynamic_.mu, "mu"}, {&config.sigma, dynamic_.sigma, "sigma"},
-                                   {&config.lambda, dynamic_.lambda, "lambda"},
-                                   {&config.real_time_factor, dynamic_.real_time_factor, "real_time_factor"},
-                                   {&config.publish_rate, dynamic_.publish_rate, "publish_rate"}}) {
-    if (!std::isnan(*value)) continue;
-    ROS_WARN("dynamic_reconfigure: %s = nan is not a number; keeping %g", name, kept);
-    *value = kept;
+  for (const auto& [name, field] : double_parameters()) {
+    if (!std::isnan(config.*field)) continue;
+    ROS_WARN("dynamic_reconfigure: %s = nan is not a number; keeping %g", name.c_str(), dynamic_.*field);
+    config.*field = dynamic_.*field;
   }
   if (settings_.deterministic && (config.sigma != 0.0 || config.lambda != 0.0)) {
     ROS_WARN("sigma and lambda stay 0 with the deterministic load (simulator.deterministic: true)");
