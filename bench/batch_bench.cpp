@@ -4,7 +4,7 @@
 #include <chrono>
 #include <cstdio>
 
-#include "gear_dynamics/batch.hpp"
+#include "gear_dynamics/montecarlo/batch.hpp"
 
 namespace gd = gear_dynamics;
 

@@ -13,9 +13,9 @@
 #include <string>
 #include <vector>
 
-#include "gear_dynamics/batch.hpp"
-#include "gear_dynamics/config.hpp"
-#include "gear_dynamics/ensemble.hpp"
+#include "gear_dynamics/montecarlo/batch.hpp"
+#include "gear_dynamics/config/config.hpp"
+#include "gear_dynamics/engine/ensemble.hpp"
 #include "params_json.hpp"
 #include "scalar_loop.hpp"
 
@@ -147,7 +147,7 @@ void run_engine(const gd::ModelConfig& c, const Options& o, Outcome& out) {
   s.threads = o.threads;
   std::vector<gd::RunSpec> runs;
   for (const gd::RunSpec& r : gd::plan_runs(model, s))
-    if ((r.kind == gd::kKindStochastic) == o.noise) runs.push_back(r);
+    if ((r.kind == gd::RunKind::Stochastic) == o.noise) runs.push_back(r);
   out.delta.assign(runs.size(), 0.0);
   out.velocity.assign(runs.size(), 0.0);
   EndStates sink(out, runs.front().id);

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The gear model (MODEL.md §2) and its integrator (§5: RK4, h = 1 us, stiffness switches split out)
+"""The gear model (doc/model.md §2) and its integrator (§5: RK4, h = 1 us, stiffness switches split out)
 in vectorised numpy, written as a competent Python user would: one array element per realization,
 a Python loop over time steps, the mesh timing precomputed for all steps at once, normals drawn in
 chunks. Run by bench/run; see --help."""

@@ -1,4 +1,4 @@
-% The gear model (MODEL.md section 2) and its integrator (section 5: RK4, h = 1 us, stiffness
+% The gear model (doc/model.md section 2) and its integrator (section 5: RK4, h = 1 us, stiffness
 % switches split out) as a MATLAB user would write it: one column element per realization, a loop
 % over time steps, the mesh timing precomputed for all steps at once, normals drawn in chunks.
 % Runs in Octave and MATLAB (run by bench/run):

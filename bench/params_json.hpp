@@ -1,12 +1,12 @@
 // The model parameters that bench/gear_numpy.py and bench/gear_octave.m integrate, as JSON: the
-// derived quantities of MODEL.md §3 that the equations use, the load and the initial state.
+// derived quantities of doc/model.md §3 that the equations use, the load and the initial state.
 #pragma once
 
 #include <cstdio>
 #include <string>
 #include <utility>
 
-#include "gear_dynamics/config.hpp"
+#include "gear_dynamics/config/config.hpp"
 
 namespace gear_bench {
 

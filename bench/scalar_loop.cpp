@@ -4,7 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "gear_dynamics/normal_stream.hpp"
+#include "gear_dynamics/engine/normal_stream.hpp"
 
 namespace gear_bench {
 
@@ -76,7 +76,7 @@ ScalarState ScalarModel::run(const gear_dynamics::LaneSpec& lane, std::uint64_t 
   double z[kChunk] = {};
   const double sqrt_h = std::sqrt(h_);
   double d = delta0, v = v0;
-  // Normal 0 gives Phi(0), normal n + 1 drives step n (MODEL.md §4).
+  // Normal 0 gives Phi(0), normal n + 1 drives step n (doc/model.md §4).
   double load = lane.load_mean + (lane.stochastic ? lane.load_sd * stream.at(0) : 0.0);
   if (samples && every > 0) samples->push_back({d, v, load});
   for (std::int64_t n = 0; n < steps; ++n) {

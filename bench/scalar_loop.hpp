@@ -1,4 +1,4 @@
-// A plain scalar C++ implementation of MODEL.md §2 and §5, written apart from the engine: one
+// A plain scalar C++ implementation of doc/model.md §2 and §5, written apart from the engine: one
 // realization at a time, one step after the other, plain doubles, its own mesh timing. It is the
 // "plain C++" row of bench/run and a cross-check of the engine; it draws the same random streams
 // (gear_dynamics::NormalStream), so it must agree with the engine path by path.
@@ -7,8 +7,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "gear_dynamics/ensemble.hpp"  // LaneSpec
-#include "gear_dynamics/gear_pair.hpp"
+#include "gear_dynamics/engine/ensemble.hpp"  // LaneSpec
+#include "gear_dynamics/model/gear_pair.hpp"
 
 namespace gear_bench {
 

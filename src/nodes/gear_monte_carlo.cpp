@@ -1,4 +1,4 @@
-// gear_monte_carlo: runs a Monte Carlo batch (MODEL.md §4, §6) into a folder of bags (the batch
+// gear_monte_carlo: runs a Monte Carlo batch (doc/model.md §4, §6) into a folder of bags (the batch
 // folder contract of PROTOCOL.md), resumable, shardable, interruptible, with progress.
 #include <ros/ros.h>
 #include <sys/resource.h>
@@ -12,7 +12,7 @@
 #include <thread>
 
 #include "gear_dynamics/BatchProgress.h"
-#include "gear_dynamics/batch.hpp"
+#include "gear_dynamics/montecarlo/batch.hpp"
 #include "gear_dynamics/ros/batch_io.hpp"
 #include "gear_dynamics/ros/conversions.hpp"
 

@@ -143,7 +143,7 @@ void write_manifest(const ModelConfig& model, const BatchSettings& settings,
   out << YAML::Key << "runs" << YAML::Value << YAML::BeginSeq;
   for (const RunSpec& r : runs) {
     out << YAML::Flow << YAML::BeginMap << YAML::Key << "name" << YAML::Value << r.name << YAML::Key << "kind"
-        << YAML::Value << r.kind << YAML::Key << "mu" << YAML::Value << r.mu << YAML::Key << "realization"
+        << YAML::Value << to_string(r.kind) << YAML::Key << "mu" << YAML::Value << r.mu << YAML::Key << "realization"
         << YAML::Value << r.index << YAML::Key << "file" << YAML::Value << r.name + ".bag" << YAML::EndMap;
   }
   out << YAML::EndSeq << YAML::EndMap;

@@ -46,12 +46,12 @@ ModelConfig load_model_config(const ros::NodeHandle& nh) {
   return parse_config(yaml_from_parameters(nh, {"gear_pair", "load", "run"}));
 }
 
-RunInfo make_run_info(const ModelConfig& config, const std::string& kind, std::uint32_t realization,
+RunInfo make_run_info(const ModelConfig& config, RunKind kind, std::uint32_t realization,
                       double mu, double sigma, double duration) {
   RunInfo m;
   m.header.stamp = sim_stamp(0.0);
   m.package_version = GEAR_DYNAMICS_VERSION;
-  m.kind = kind;
+  m.kind = to_string(kind);
   m.seed = config.seed;
   m.realization = realization;
   m.mu = mu;
@@ -84,13 +84,13 @@ GearState make_state(const Ensemble& e, int lane, double center_distance) {
   return m;
 }
 
-RunSummary make_summary(const std::string& run_name, const std::string& kind,
+RunSummary make_summary(const std::string& run_name, RunKind kind,
                         std::uint32_t realization, double mu, double mesh_phase,
                         const RunSettings& run, const RunResult& r) {
   RunSummary m;
   m.header.stamp = sim_stamp(run.duration);
   m.run_name = run_name;
-  m.kind = kind;
+  m.kind = to_string(kind);
   m.realization = realization;
   m.mu = mu;
   m.mesh_phase = mesh_phase;

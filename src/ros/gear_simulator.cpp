@@ -425,7 +425,7 @@ void GearSimulator::publish_run_info() {
     current.load.sigma = lane.sigma;
     current.load.drift = lane.drift;
   }
-  RunInfo info = make_run_info(current, settings_.deterministic ? kKindS1 : kKindStochastic,
+  RunInfo info = make_run_info(current, settings_.deterministic ? RunKind::S1 : RunKind::Stochastic,
                                static_cast<std::uint32_t>(lane.realization), lane.mu, lane.sigma,
                                settings_.t_end);
   info.header.stamp = sim_stamp(ensemble_.time());  // these values hold from here on

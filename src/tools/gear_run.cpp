@@ -1,16 +1,20 @@
 // gear_run: runs S1 and a few stochastic realizations from the configuration, writes a CSV of the
 // decimated series and prints one summary line per run. No ROS master needed.
+#include <unistd.h>
+
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <iostream>
 #include <string>
 #include <vector>
 
-#include "gear_dynamics/config.hpp"
-#include "gear_dynamics/ensemble.hpp"
-#include "gear_dynamics/simulation.hpp"
+#include "gear_dynamics/config/config.hpp"
+#include "gear_dynamics/engine/ensemble.hpp"
+#include "gear_dynamics/engine/simulation.hpp"
 
 namespace gd = gear_dynamics;
 
@@ -26,6 +30,9 @@ Runs the deterministic run S1 and stochastic realizations of the spur-gear model
   --no-deterministic  leave out S1
   --rate HZ           CSV sample rate in simulated Hz (default 1000; 0 = no CSV)
   --output FILE       CSV path (default gear_run.csv; '-' = stdout)
+The defaults come from the package's config/ folder: $GEAR_DYNAMICS_CONFIG_DIR if set, else the
+installed share/gear_dynamics/config, else gear_dynamics/config on $ROS_PACKAGE_PATH.
+Snapshot times after run.duration are dropped with a notice (a short --set run.duration run).
 CSV columns (SI): run,t,delta,delta_dot,phi,center_distance.
 Summary lines use the paper's units: mm, mm/s, mm s^-1/2.
 )";
@@ -76,17 +83,62 @@ void apply_set(YAML::Node& root, const std::string& assignment) {
   gd::merge_yaml(root, overlay);
 }
 
+// The folder holding gear_pair.yaml, load.yaml and run.yaml (see kUsage); never a path fixed at
+// build time, so an installed gear_run finds its installed defaults.
+std::string config_dir() {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> tried;
+  if (const char* env = std::getenv("GEAR_DYNAMICS_CONFIG_DIR")) tried.emplace_back(env);
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);  // <prefix>/lib/gear_dynamics/gear_run
+  if (!ec) tried.push_back(exe.parent_path().parent_path().parent_path() / "share" / "gear_dynamics" / "config");
+  if (const char* rpp = std::getenv("ROS_PACKAGE_PATH")) {
+    std::stringstream paths(rpp);
+    for (std::string root; std::getline(paths, root, ':');)
+      if (!root.empty()) tried.push_back(fs::path(root) / "gear_dynamics" / "config");
+  }
+  std::string list;
+  for (const fs::path& d : tried) {
+    if (fs::is_regular_file(d / "gear_pair.yaml", ec)) return d.string();
+    list += "\n  " + d.string();
+  }
+  throw std::runtime_error("cannot find the default configuration (gear_pair.yaml); looked in:" + list +
+                           "\nset GEAR_DYNAMICS_CONFIG_DIR to the package's config folder");
+}
+
+// Drops run.snapshot_times that lie after run.duration, with one notice, so that a short run set
+// with --set run.duration=... works without restating the snapshot list.
+void drop_late_snapshots(YAML::Node& root) {
+  YAML::Node run = root["run"];
+  double duration = 0.0;
+  if (!run || !run["snapshot_times"] || !run["snapshot_times"].IsSequence() ||
+      !gd::detail::as_number(run["duration"], duration))
+    return;
+  YAML::Node kept(YAML::NodeType::Sequence);
+  std::string dropped;
+  for (const YAML::Node& t : run["snapshot_times"]) {
+    double v = 0.0;
+    if (gd::detail::as_number(t, v) && v > duration) dropped += (dropped.empty() ? "" : ", ") + gd::detail::show(t);
+    else kept.push_back(t);
+  }
+  if (dropped.empty()) return;
+  std::cerr << "gear_run: snapshot times " << dropped << " s lie after run.duration = " << duration
+            << " s: dropped\n";
+  run["snapshot_times"] = kept;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) try {
   const Options opt = parse(argc, argv);
-  const std::string dir = GEAR_DYNAMICS_CONFIG_DIR;
+  const std::string dir = config_dir();
   std::vector<std::string> files = {dir + "/gear_pair.yaml", dir + "/load.yaml", dir + "/run.yaml"};
   files.insert(files.end(), opt.files.begin(), opt.files.end());
   YAML::Node root = gd::read_yaml_files(files);
   for (const auto& s : opt.sets) apply_set(root, s);
   if (opt.mu >= 0) root["gear_pair"]["friction_coefficient"] = opt.mu;
   if (opt.seed >= 0) root["run"]["seed"] = opt.seed;
+  drop_late_snapshots(root);
   const gd::ModelConfig cfg = gd::parse_config(root);
 
   std::vector<gd::LaneSpec> lanes;

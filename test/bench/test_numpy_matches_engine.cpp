@@ -2,7 +2,7 @@
 // deterministic run it must follow the engine path by path (the 1e-9 relative) before the
 // chaotic separation (~0.1 s). Two starts over 10 ms: S1 from rest (free flight, the first
 // impacts), and at rest in contact, where every stiffness switch falls inside the contact, so the
-// switch splitting of MODEL.md §5 decides the result (without it the paths differ at order 1).
+// switch splitting of doc/model.md §5 decides the result (without it the paths differ at order 1).
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>  // reads JSON
 
@@ -11,8 +11,8 @@
 #include <fstream>
 #include <string>
 
-#include "gear_dynamics/config.hpp"
-#include "gear_dynamics/ensemble.hpp"
+#include "gear_dynamics/config/config.hpp"
+#include "gear_dynamics/engine/ensemble.hpp"
 #include "params_json.hpp"
 
 namespace gd = gear_dynamics;

@@ -1,13 +1,13 @@
-// The analytic checks of MODEL.md §7, run through the production integrator (Ensemble).
+// The analytic checks of doc/model.md §7, run through the production integrator (Ensemble).
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
 #include <functional>
 
-#include "gear_dynamics/ensemble.hpp"
-#include "gear_dynamics/gear_pair.hpp"
-#include "gear_dynamics/simulation.hpp"
+#include "gear_dynamics/engine/ensemble.hpp"
+#include "gear_dynamics/model/gear_pair.hpp"
+#include "gear_dynamics/engine/simulation.hpp"
 
 namespace gd = gear_dynamics;
 
@@ -160,7 +160,7 @@ TEST(Analytic, ElasticImpact) {
     const double tk = (2.0 * kPi - 2.0 * std::atan(vc / (w * xs))) / w;
     EXPECT_NEAR(tk, double_pair ? 47.00436e-6 : 62.26572e-6, 5e-12);
 
-    // MODEL.md's case as stated: from rest at delta = 0, h = 1 us.
+    // doc/model.md's case as stated: from rest at delta = 0, h = 1 us.
     const ImpactErrors stated = elastic_impact(double_pair, 1e-6, 0.0);
     EXPECT_LE(stated.energy, 1e-4);
     EXPECT_LE(stated.position, 2e-9);
@@ -207,11 +207,11 @@ double rebound(double h, double v_in, double lead) {
 TEST(Analytic, HuntCrossleyRestitution) {
   const gd::GearPair g = gear({});
   const double beta = g.damping_coefficient / g.k1;
-  // MODEL.md prints 0.8926607; its own alpha / k1 = 1.2003894e8 / 1.3447321e8 = 0.89266063.
+  // doc/model.md prints 0.8926607; its own alpha / k1 = 1.2003894e8 / 1.3447321e8 = 0.89266063.
   EXPECT_NEAR(beta, 0.8926607, 1e-6 * beta);
   const double v_in = 0.05, exact = exact_rebound(beta, v_in);
   EXPECT_NEAR(exact, 0.04855510, 5e-9);
-  EXPECT_LE(std::abs(rebound(1e-6, v_in, 0.0) - exact) / exact, 5e-5);  // MODEL.md's case
+  EXPECT_LE(std::abs(rebound(1e-6, v_in, 0.0) - exact) / exact, 5e-5);  // doc/model.md's case
 
   const auto mean_error = [&](double h) {
     return phase_averaged(
@@ -279,7 +279,7 @@ TEST(Analytic, LoadProcessMoments) {
   const double cov = ((phis - mean(phis)) * (phit - mean(phit))).sum() / (n - 1);
   const double vs = sd0 * sd0 + sigma * sigma * s, vt = sd0 * sd0 + sigma * sigma * t;
   EXPECT_NEAR(cov, cov_exact, 4.0 * std::sqrt((vs * vt + cov_exact * cov_exact) / n));
-  // At T = 0.4 s with the paper's sd0 = 5, sigma = 5 (MODEL.md): sd 5.9160798 m/s^2.
+  // At T = 0.4 s with the paper's sd0 = 5, sigma = 5 (doc/model.md): sd 5.9160798 m/s^2.
   EXPECT_NEAR(std::sqrt(5.0 * 5.0 + 5.0 * 5.0 * 0.4), 5.9160798, 5e-8);
 }
 

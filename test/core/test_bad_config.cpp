@@ -9,10 +9,10 @@
 #include <algorithm>
 
 #include "bad_input.hpp"
-#include "gear_dynamics/batch.hpp"
-#include "gear_dynamics/batch_analysis.hpp"
-#include "gear_dynamics/config.hpp"
-#include "gear_dynamics/ros/simulator_settings.hpp"
+#include "gear_dynamics/montecarlo/batch.hpp"
+#include "gear_dynamics/analysis/batch_analysis.hpp"
+#include "gear_dynamics/config/config.hpp"
+#include "gear_dynamics/config/simulator_settings.hpp"
 
 namespace gd = gear_dynamics;
 namespace bi = bad_input;

@@ -9,7 +9,7 @@
 #include <mutex>
 #include <set>
 
-#include "gear_dynamics/batch.hpp"
+#include "gear_dynamics/montecarlo/batch.hpp"
 
 namespace gd = gear_dynamics;
 
@@ -126,20 +126,20 @@ TEST(Batch, PlanNamesKindsPhasesAndRecordIntervals) {
     const gd::RunSpec& r = runs[i];
     EXPECT_EQ(r.id, i);
     names.insert(r.name);
-    if (r.kind == gd::kKindPhase) {
+    if (r.kind == gd::RunKind::Phase) {
       EXPECT_EQ(r.mesh_phase, r.index * phi_n / 64);
       EXPECT_EQ(r.record_every, 1000);
     } else {
       EXPECT_EQ(r.mesh_phase, model.gear.mesh_phase);
       // S1, S2 and S3 get the dense series.
-      EXPECT_EQ(r.record_every, r.kind == gd::kKindS1 || r.index < 2 ? 10 : 1000) << r.name;
+      EXPECT_EQ(r.record_every, r.kind == gd::RunKind::S1 || r.index < 2 ? 10 : 1000) << r.name;
     }
   }
   EXPECT_EQ(names.size(), runs.size());
   EXPECT_EQ(runs[0].name, "mu0.0000_S1");
   EXPECT_EQ(runs[8].name, "mu0.0000_phase07");
   EXPECT_EQ(runs[77 + 65 + 11].name, "mu0.0400_r00011");
-  EXPECT_EQ(runs[77 + 65 + 11].kind, gd::kKindStochastic);
+  EXPECT_EQ(runs[77 + 65 + 11].kind, gd::RunKind::Stochastic);
 
   s.phase_ensemble = false;
   EXPECT_EQ(gd::plan_runs(model, s).size(), 2u * (1 + 12));
@@ -213,7 +213,7 @@ TEST(Batch, BitIdenticalForAnyThreadsBlockSizeAndShards) {
   EXPECT_FALSE(identical(reference.at("mu0.0000_r00000"), reference.at("mu0.0000_r00001")));
   EXPECT_FALSE(identical(reference.at("mu0.0000_phase00"), reference.at("mu0.0000_phase01")));
   EXPECT_EQ(reference.at("mu0.0500_S1").result.final_load, model.load.initial_mean);
-  // Common random numbers: realization r has the same load path at every mu (MODEL.md §4),
+  // Common random numbers: realization r has the same load path at every mu (doc/model.md §4),
   // while the gear's response depends on mu.
   for (int r = 0; r < 5; ++r) {
     const auto& a = reference.at("mu0.0000_r0000" + std::to_string(r)).result;
@@ -224,7 +224,7 @@ TEST(Batch, BitIdenticalForAnyThreadsBlockSizeAndShards) {
   }
 }
 
-// MODEL.md §7 check 7 through the batch: E[Phi(t)] = Phi0 + lambda t, Var[Phi(t)] = sd0^2 + sigma^2 t,
+// doc/model.md §7 check 7 through the batch: E[Phi(t)] = Phi0 + lambda t, Var[Phi(t)] = sd0^2 + sigma^2 t,
 // and the increment Phi(t) - Phi(0) ~ N(lambda t, sigma^2 t), over R = 2000 realizations at the
 // snapshot times, within 4 standard errors (mean: sqrt(v/R); variance of a normal sample:
 // v sqrt(2/(R-1))).

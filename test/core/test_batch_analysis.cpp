@@ -7,9 +7,9 @@
 #include <random>
 #include <sstream>
 
-#include "gear_dynamics/batch_analysis.hpp"
-#include "gear_dynamics/config.hpp"
-#include "gear_dynamics/report.hpp"
+#include "gear_dynamics/analysis/batch_analysis.hpp"
+#include "gear_dynamics/config/config.hpp"
+#include "gear_dynamics/analysis/report.hpp"
 
 namespace gd = gear_dynamics;
 namespace fs = std::filesystem;

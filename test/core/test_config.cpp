@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "gear_dynamics/config.hpp"
+#include "gear_dynamics/config/config.hpp"
 
 namespace gd = gear_dynamics;
 

@@ -1,16 +1,16 @@
-// Every derived quantity against the values printed in MODEL.md §3.
+// Every derived quantity against the values printed in doc/model.md §3.
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "gear_dynamics/gear_pair.hpp"
-#include "gear_dynamics/mesh_schedule.hpp"
+#include "gear_dynamics/model/gear_pair.hpp"
+#include "gear_dynamics/model/mesh_schedule.hpp"
 
 namespace gd = gear_dynamics;
 
 namespace {
 
-// MODEL.md prints most values to 8 significant digits (relative 1e-6 is the brief's tolerance);
+// doc/model.md prints most values to 8 significant digits (relative 1e-6 is the brief's tolerance);
 // a few are printed with fewer digits, so the tolerance is also never below half a unit in the
 // last printed place.
 void expect_printed(double actual, double printed, double last_place, const char* name) {
@@ -55,7 +55,7 @@ TEST(GearPair, DerivedQuantitiesMatchModelMd) {
   expect_printed(g.k2, 2.3532813e8, 1e1, "k2");
   expect_printed(g.damping_coefficient, 1.2003894e8, 1e1, "alpha");
   expect_printed(g.in.pinion_speed, 104.71976, 1e-5, "Omega");
-  // MODEL.md: the square wave with mean k_mean gives exactly k2 = 1.75 k1.
+  // doc/model.md: the square wave with mean k_mean gives exactly k2 = 1.75 k1.
   EXPECT_NEAR(g.k2 / g.k1, 1.75, 1e-12);
   // §3 derived dynamics and §7 check 8: omega = sqrt(q3 K) at mu = 0.
   expect_printed(std::sqrt(g.q3 * g.k1), 50737.72, 1e-2, "omega1");
@@ -63,7 +63,7 @@ TEST(GearPair, DerivedQuantitiesMatchModelMd) {
   // Static deflections under Phi0 = 20 m/s^2.
   expect_printed(20.0 / (g.q3 * g.k1), 7.769e-9, 1e-12, "x_s(k1)");
   expect_printed(20.0 / (g.q3 * g.k2), 4.439e-9, 1e-12, "x_s(k2)");
-  // The friction arm runs from X_B to X_E over one mesh period (MODEL.md D4).
+  // The friction arm runs from X_B to X_E over one mesh period (doc/model.md D4).
   EXPECT_NEAR(g.friction_factor(g.mesh_period_angle), g.c0 + g.c1 * g.x_e, 1e-9);
 }
 
@@ -71,7 +71,7 @@ TEST(MeshSchedule, SquareWaveTimingAndSplits) {
   const gd::GearPair g = gd::derive(gd::GearInputs{});
   const double h = 1e-6;
   const gd::MeshSchedule mesh(g, h);
-  // Mesh period 3.000 ms, single-pair time 0.92612 ms (MODEL.md §3).
+  // Mesh period 3.000 ms, single-pair time 0.92612 ms (doc/model.md §3).
   const double tm = g.mesh_period_angle / g.in.pinion_speed;
   const double ts = g.single_pair_angle / g.in.pinion_speed;
   EXPECT_NEAR(tm, 3.000e-3, 5e-7);

@@ -5,9 +5,9 @@
 #include <cmath>
 #include <utility>
 
-#include "gear_dynamics/ensemble.hpp"
-#include "gear_dynamics/observers.hpp"
-#include "gear_dynamics/simulation.hpp"
+#include "gear_dynamics/engine/ensemble.hpp"
+#include "gear_dynamics/engine/observers.hpp"
+#include "gear_dynamics/engine/simulation.hpp"
 
 namespace gd = gear_dynamics;
 

@@ -7,8 +7,8 @@
 
 #include <Random123/philox.h>
 
-#include "gear_dynamics/ensemble.hpp"
-#include "gear_dynamics/normal_stream.hpp"
+#include "gear_dynamics/engine/ensemble.hpp"
+#include "gear_dynamics/engine/normal_stream.hpp"
 
 namespace gd = gear_dynamics;
 
@@ -28,7 +28,7 @@ gd::LaneSpec stochastic(std::uint64_t r, double mu) {
 
 }  // namespace
 
-// The SIMD Philox is Random123's Philox4x32-10, bit for bit, on the counters and keys of MODEL.md's
+// The SIMD Philox is Random123's Philox4x32-10, bit for bit, on the counters and keys of doc/model.md's
 // (seed, realization) scheme, including high seed and realization bits.
 TEST(NormalStream, PhiloxMatchesRandom123) {
   for (const std::uint64_t seed : {20180529ull, 0x123456789ABCDEFull}) {

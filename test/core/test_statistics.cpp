@@ -5,7 +5,7 @@
 #include <limits>
 #include <random>
 
-#include "gear_dynamics/statistics.hpp"
+#include "gear_dynamics/analysis/statistics.hpp"
 
 namespace gd = gear_dynamics;
 
@@ -115,7 +115,7 @@ TEST(Histogram, NumpyBinRuleAndOutsideCount) {
 }
 
 TEST(Histogram, EdgesLikeLinspace) {
-  // MODEL.md's delta edges 0.030:0.0005:0.060 mm (in m): 60 bins, lo + i (hi - lo) / n.
+  // doc/model.md's delta edges 0.030:0.0005:0.060 mm (in m): 60 bins, lo + i (hi - lo) / n.
   const gd::BinSpec spec{3.0e-5, 6.0e-5, 5.0e-7};
   ASSERT_EQ(spec.bins(), 60u);
   const std::vector<double> e = spec.edges();

@@ -5,8 +5,8 @@
 #include <iostream>
 #include <string>
 
-#include "gear_dynamics/config.hpp"
-#include "gear_dynamics/ensemble.hpp"
+#include "gear_dynamics/config/config.hpp"
+#include "gear_dynamics/engine/ensemble.hpp"
 
 namespace gd = gear_dynamics;
 

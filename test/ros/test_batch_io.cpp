@@ -127,7 +127,7 @@ TEST(BatchBags, OneLz4BagPerRunWithRunInfoFirstSeriesAndSummaryLast) {
     EXPECT_DOUBLE_EQ(times.back(), model.run.duration);
     const auto summary = rosbag::View(bag, rosbag::TopicQuery(gd::kSummaryTopic)).begin()->instantiate<gd::RunSummary>();
     EXPECT_EQ(summary->run_name, r.name);
-    EXPECT_EQ(summary->kind, r.kind);
+    EXPECT_EQ(summary->kind, gd::to_string(r.kind));
     EXPECT_EQ(summary->realization, r.index);
     EXPECT_EQ(summary->snapshot_times.size(), 2u);
   }

@@ -62,7 +62,7 @@ void write_bag(const fs::path& file, const RunSpec& r, const gd::ModelConfig& co
   rosbag::Bag bag(file.string(), rosbag::bagmode::Write);
   bag.setCompression(rosbag::compression::LZ4);
   const double T = config.run.duration;
-  gd::RunInfo info = gd::make_run_info(config, gd::to_string(r.kind), r.index, r.mu,
+  gd::RunInfo info = gd::make_run_info(config, r.kind, r.index, r.mu,
                                        r.kind == gd::RunKind::Stochastic ? config.load.sigma : 0.0, T);
   bag.write(gd::kRunInfoTopic, gd::sim_stamp(0.0), info);
   for (int k = 0; k <= 400; ++k) {  // enough messages for several chunks

@@ -3,8 +3,8 @@
 #include <gtest/gtest.h>
 
 #include "gear_dynamics/SimulatorConfig.h"
-#include "gear_dynamics/config.hpp"
-#include "gear_dynamics/ros/simulator_settings.hpp"
+#include "gear_dynamics/config/config.hpp"
+#include "gear_dynamics/config/simulator_settings.hpp"
 
 namespace gd = gear_dynamics;
 

@@ -17,7 +17,7 @@
 #include <variant>
 #include <vector>
 
-#include "gear_dynamics/batch.hpp"
+#include "gear_dynamics/montecarlo/batch.hpp"
 #include "gear_dynamics/ros/conversions.hpp"
 
 namespace rosbag {

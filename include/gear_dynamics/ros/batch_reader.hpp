@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "gear_dynamics/report.hpp"
+#include "gear_dynamics/analysis/report.hpp"
 #include "gear_dynamics/ros/conversions.hpp"  // topics of a run bag, manifest format
 
 namespace gear_dynamics {

@@ -11,10 +11,10 @@
 #include "gear_dynamics/GearState.h"
 #include "gear_dynamics/RunInfo.h"
 #include "gear_dynamics/RunSummary.h"
-#include "gear_dynamics/batch.hpp"  // run kinds
-#include "gear_dynamics/config.hpp"
-#include "gear_dynamics/ensemble.hpp"
-#include "gear_dynamics/simulation.hpp"
+#include "gear_dynamics/montecarlo/run_kind.hpp"
+#include "gear_dynamics/config/config.hpp"
+#include "gear_dynamics/engine/ensemble.hpp"
+#include "gear_dynamics/engine/simulation.hpp"
 
 namespace gear_dynamics {
 
@@ -34,11 +34,11 @@ constexpr const char* kStateTopic = "/gear/state";
 constexpr const char* kSummaryTopic = "/gear/summary";
 constexpr const char* kManifestFormat = "gear_dynamics_batch/1";
 
-RunInfo make_run_info(const ModelConfig& config, const std::string& kind, std::uint32_t realization,
+RunInfo make_run_info(const ModelConfig& config, RunKind kind, std::uint32_t realization,
                       double mu, double sigma, double duration);
 // State of `lane` now; center_distance is the instantaneous d(t) (SI).
 GearState make_state(const Ensemble& ensemble, int lane, double center_distance);
-RunSummary make_summary(const std::string& run_name, const std::string& kind,
+RunSummary make_summary(const std::string& run_name, RunKind kind,
                         std::uint32_t realization, double mu, double mesh_phase,
                         const RunSettings& run, const RunResult& result);
 

@@ -1,4 +1,4 @@
-// gear_simulator: one realization of the gear model (MODEL.md) stepped in simulated time on its own
+// gear_simulator: one realization of the gear model (doc/model.md) stepped in simulated time on its own
 // thread. It owns /clock, paces itself by wall time and publishes a decimation of the integration
 // grid. ROS callbacks (services, dynamic_reconfigure) only hand requests to the stepping thread,
 // which applies them between two integration steps, at the next publish instant.
@@ -20,10 +20,10 @@
 #include <thread>
 
 #include "gear_dynamics/SimulatorConfig.h"
-#include "gear_dynamics/config.hpp"
-#include "gear_dynamics/ensemble.hpp"
-#include "gear_dynamics/observers.hpp"
-#include "gear_dynamics/ros/simulator_settings.hpp"
+#include "gear_dynamics/config/config.hpp"
+#include "gear_dynamics/engine/ensemble.hpp"
+#include "gear_dynamics/engine/observers.hpp"
+#include "gear_dynamics/config/simulator_settings.hpp"
 
 namespace gear_dynamics {
 

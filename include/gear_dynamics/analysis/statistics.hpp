@@ -1,4 +1,4 @@
-// Sample statistics for the Monte Carlo analysis (MODEL.md §8) and the uncertainty the paper does
+// Sample statistics for the Monte Carlo analysis (doc/model.md §8) and the uncertainty the paper does
 // not give: quantiles, box-plot statistics, proportions with Wilson intervals, a distribution-free
 // interval for the median, density histograms and rank tests across groups. Pure functions on
 // plain numbers: no units, no ROS.
@@ -8,10 +8,9 @@
 #include <string>
 #include <vector>
 
-namespace gear_dynamics {
+#include "gear_dynamics/config/analysis_settings.hpp"  // BinSpec, kConfidence
 
-// The default confidence level of every interval reported.
-constexpr double kConfidence = 0.95;
+namespace gear_dynamics {
 
 // Quantile of a sorted sample by linear interpolation (Hyndman-Fan type 7, numpy's and R's
 // default): h = (n - 1) p, x[floor h] + (h - floor h) (x[floor h + 1] - x[floor h]).
@@ -35,16 +34,6 @@ struct Proportion {
   double estimate = 0, low = 0, high = 0;
 };
 Proportion wilson(std::size_t successes, std::size_t trials, double confidence = kConfidence);
-
-// Equal-width bin edges lo, lo + w, ..., hi, computed as lo + i (hi - lo) / n like numpy.linspace,
-// so an independent check can rebuild them. n = (hi - lo) / width must be a whole number.
-struct BinSpec {
-  double lo = 0, hi = 1, width = 1;
-  std::size_t bins() const;
-  std::vector<double> edges() const;
-};
-// Throws std::invalid_argument naming `name`, the values and the rule if the spec is unusable.
-void validate(const BinSpec& spec, const std::string& name);
 
 // Histogram with numpy's rule: bin i is [e_i, e_{i+1}), the last bin also holds e_n. Values
 // outside [e_0, e_n] (and NaN) are counted apart, never dropped silently.

@@ -1,4 +1,4 @@
-#include "gear_dynamics/config.hpp"
+#include "gear_dynamics/config/config.hpp"
 
 #include <cmath>
 #include <functional>
@@ -193,7 +193,7 @@ void validate_consistency(const ModelConfig& c) {
       e << "run.time_step = " << h << " s is too large for the stiffest contact: omega_max h = " << wh
         << " with omega_max = " << wh / h << " rad/s at mu = " << kMaxFrictionCoefficient
         << "; RK4 needs omega_max h < " << kMaxOmegaTimesStep << " (stability), i.e. time_step < "
-        << kMaxOmegaTimesStep / (wh / h) << " s; MODEL.md's accuracy needs omega_max h <= 0.07";
+        << kMaxOmegaTimesStep / (wh / h) << " s; doc/model.md's accuracy needs omega_max h <= 0.07";
       errors.push_back(e.str());
       e.str("");
     }

@@ -1,4 +1,4 @@
-// One counter-based stream of standard normals per realization (MODEL.md §4): Philox4x32-10
+// One counter-based stream of standard normals per realization (doc/model.md §4): Philox4x32-10
 // (bit for bit Random123's) keyed by (seed, realization), turned into normals by Box-Muller,
 // generated kBlockPairs counters at a time in SIMD.
 // Normal i of a stream depends only on (seed, realization, i), so a realization has the same path

@@ -1,4 +1,4 @@
-#include "gear_dynamics/mesh_schedule.hpp"
+#include "gear_dynamics/model/mesh_schedule.hpp"
 
 #include <cmath>
 

@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "gear_dynamics/ensemble.hpp"
-#include "gear_dynamics/gear_pair.hpp"
-#include "gear_dynamics/simulation.hpp"
+#include "gear_dynamics/engine/ensemble.hpp"
+#include "gear_dynamics/model/gear_pair.hpp"
+#include "gear_dynamics/engine/simulation.hpp"
 
 namespace gear_dynamics {
 
@@ -43,7 +43,7 @@ constexpr double kMaxFrictionCoefficient = 0.2;
 constexpr double kMaxLoadSigma = 100.0;
 // Largest |lambda| accepted [m/s^3].
 constexpr double kMaxLoadDrift = 1.0e6;
-// RK4 is stable for an undamped oscillator while omega h < 2 sqrt(2) (MODEL.md §5).
+// RK4 is stable for an undamped oscillator while omega h < 2 sqrt(2) (doc/model.md §5).
 constexpr double kMaxOmegaTimesStep = 2.8284271247461903;
 
 // One key of the schema: the kind and range (closed unless open_*) its value must have. The

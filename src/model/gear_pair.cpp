@@ -1,4 +1,4 @@
-#include "gear_dynamics/gear_pair.hpp"
+#include "gear_dynamics/model/gear_pair.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-// The Monte Carlo analysis of a batch (MODEL.md §6, §8): from one fixed-size record per run to
+// The Monte Carlo analysis of a batch (doc/model.md §6, §8): from one fixed-size record per run to
 // the statistics per friction coefficient and the tests across them. SI units throughout; the
 // report converts to the paper's units. No ROS.
 #pragma once
@@ -10,13 +10,11 @@
 #include <string>
 #include <vector>
 
-#include "gear_dynamics/statistics.hpp"
+#include "gear_dynamics/analysis/statistics.hpp"
+#include "gear_dynamics/config/analysis_settings.hpp"
+#include "gear_dynamics/montecarlo/run_kind.hpp"
 
 namespace gear_dynamics {
-
-enum class RunKind { S1, Phase, Stochastic };
-const char* to_string(RunKind kind);               // "S1", "phase", "stochastic"
-std::optional<RunKind> run_kind_from(const std::string& text);
 
 // What the analysis keeps of one run (from its RunSummary). SI units.
 struct RunRecord {
@@ -32,29 +30,6 @@ struct RunRecord {
   std::vector<double> snapshot_times, snapshot_delta, snapshot_delta_dot;  // [s], [m], [m/s]
 };
 
-struct Interval {
-  double lo = 0, hi = 0;  // closed
-  bool contains(double x) const { return x >= lo && x <= hi; }
-};
-
-// The analysis parameters (the `analysis` section of config/aggregator.yaml), SI units.
-struct AnalysisSettings {
-  double confidence = kConfidence;
-  Interval delta_interval{4.0e-5, 5.5e-5};       // Table 4 [m]
-  Interval delta_dot_interval{-0.016, 0.016};    // Table 4 [m/s]
-  BinSpec delta_bins{3.0e-5, 6.0e-5, 5.0e-7};    // Fig. 11 [m]
-  BinSpec delta_dot_bins{-0.040, 0.040, 0.002};  // Fig. 12 [m/s]
-  BinSpec joint_delta_bins{3.0e-5, 6.0e-5, 1.0e-6};     // Fig. 10 [m]
-  BinSpec joint_delta_dot_bins{-0.040, 0.040, 0.004};   // Fig. 10 [m/s]
-  std::vector<double> joint_times{0.30, 0.33, 0.36, 0.40};  // Fig. 10 [s], among the snapshot times
-};
-
-// Reads and validates the `analysis` section of `root` (missing keys keep their defaults; unknown
-// keys, wrong types and bad values are errors naming the key, the value and the allowed range).
-// Throws ConfigError.
-AnalysisSettings parse_analysis_settings(const YAML::Node& root);
-YAML::Node to_yaml(const AnalysisSettings& settings);
-
 // Statistics of one friction coefficient.
 struct MuAnalysis {
   double mu = 0;
@@ -64,12 +39,12 @@ struct MuAnalysis {
   BoxStats center_distance, steady_state_time, steady_state_time_fine, final_delta, final_delta_dot;
   std::optional<double> s2_center_distance, s3_center_distance;  // realizations 0 and 1 (Fig. 8)
   Proportion d_exceeds_s1;           // P(d > d_S1), strict (the paper's 93 % statement)
-  Proportion d_exceeds_phase_median; // P(d > median of the phase ensemble's d) (MODEL.md §6)
+  Proportion d_exceeds_phase_median; // P(d > median of the phase ensemble's d) (doc/model.md §6)
   Proportion reached_steady_state;   // P(t_ss < T)
   Proportion delta_in_interval, delta_dot_in_interval;  // Table 4
   Histogram delta_pdf, delta_dot_pdf;                   // Figs. 11, 12 (at T)
   std::vector<Histogram2D> joint_pdf;                   // Fig. 10, one per joint time
-  // Deterministic phase ensemble (MODEL.md §6).
+  // Deterministic phase ensemble (doc/model.md §6).
   BoxStats phase_center_distance, phase_steady_state_time, phase_final_delta, phase_final_delta_dot;
 };
 

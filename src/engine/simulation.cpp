@@ -1,9 +1,9 @@
-#include "gear_dynamics/simulation.hpp"
+#include "gear_dynamics/engine/simulation.hpp"
 
 #include <cmath>
 #include <numeric>
 
-#include "gear_dynamics/observers.hpp"
+#include "gear_dynamics/engine/observers.hpp"
 
 namespace gear_dynamics {
 

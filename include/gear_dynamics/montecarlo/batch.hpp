@@ -1,4 +1,4 @@
-// Monte Carlo batches (MODEL.md §4, §6): the run set of a μ sweep, its split into shards, blocks of
+// Monte Carlo batches (doc/model.md §4, §6): the run set of a μ sweep, its split into shards, blocks of
 // lanes that share a mesh phase, and running the blocks in parallel with TBB. No ROS: what happens
 // to a run's states and result is up to a BatchSink (the batch node writes bags).
 //
@@ -14,45 +14,18 @@
 #include <string>
 #include <vector>
 
-#include "gear_dynamics/config.hpp"
-#include "gear_dynamics/ensemble.hpp"
-#include "gear_dynamics/simulation.hpp"
+#include "gear_dynamics/config/batch_settings.hpp"
+#include "gear_dynamics/config/config.hpp"
+#include "gear_dynamics/engine/ensemble.hpp"
+#include "gear_dynamics/engine/simulation.hpp"
+#include "gear_dynamics/montecarlo/run_kind.hpp"
 
 namespace gear_dynamics {
-
-// Run kinds as written in RunInfo.kind, RunSummary.kind and the manifest.
-constexpr const char* kKindS1 = "S1";                  // deterministic, configured mesh phase
-constexpr const char* kKindPhase = "phase";            // deterministic, phi0 = j phi_n / 64
-constexpr const char* kKindStochastic = "stochastic";  // realization r of the load process
-constexpr int kPhaseEnsembleSize = 64;                 // MODEL.md §6
-
-// The `monte_carlo` section (config/monte_carlo.yaml).
-struct BatchSettings {
-  // What the batch holds: the manifest records these and resume compares them.
-  std::vector<double> mu{0.0, 0.01, 0.02, 0.03, 0.04, 0.05};  // friction coefficients [-]
-  std::uint32_t realizations = 100;     // R: stochastic realizations 0..R-1 per mu
-  bool phase_ensemble = true;           // S1 repeated over phi0 = j phi_n / 64, j = 0..63
-  double record_rate = 1.0e5;           // [Hz] series of S1 and realizations < record_realizations
-  std::uint32_t record_realizations = 2;  // S2 = realization 0, S3 = realization 1
-  double sparse_record_rate = 100.0;    // [Hz] series of every other run; 0 = none
-  // How it runs: no effect on any bag's content.
-  std::string output_dir = "batch";
-  bool overwrite = false;               // replace a folder that holds another batch
-  int shard_index = 0, shard_count = 1;
-  int block_lanes = 32;                 // realizations stepped together
-  int threads = 0;                      // 0 = all cores
-};
-
-// Validates the `monte_carlo` map against `model` (the record rates must divide its grid).
-// Throws ConfigError naming every bad key, its value and the allowed range.
-BatchSettings parse_batch_settings(const YAML::Node& section, const ModelConfig& model);
-// The settings that define the batch's content, as a `monte_carlo` map (for the manifest).
-YAML::Node content_yaml(const BatchSettings& settings);
 
 struct RunSpec {
   std::size_t id = 0;           // position in the whole batch (plan order)
   std::string name;             // mu0.0400_S1, mu0.0400_phase07, mu0.0400_r00012
-  std::string kind;             // kKindS1, kKindPhase or kKindStochastic
+  RunKind kind = RunKind::S1;
   double mu = 0.0;
   std::uint32_t index = 0;      // realization r, phase member j, 0 for S1
   double mesh_phase = 0.0;      // phi0 [rad]

@@ -6,13 +6,13 @@
 #include <string>
 #include <vector>
 
-#include "gear_dynamics/batch_analysis.hpp"
-#include "gear_dynamics/config.hpp"
+#include "gear_dynamics/analysis/batch_analysis.hpp"
+#include "gear_dynamics/config/config.hpp"
 
 namespace gear_dynamics {
 
 // SI -> the paper's units: m -> mm, m/s -> mm/s, m s^-1/2 -> mm s^-1/2 (sqrt(1e3 * 1e3)),
-// m/s^2 -> mm/s^2 (MODEL.md §1).
+// m/s^2 -> mm/s^2 (doc/model.md §1).
 constexpr double kToPaperUnits = 1e3;
 
 // A bag the reader did not use, and why.

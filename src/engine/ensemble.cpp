@@ -1,4 +1,4 @@
-#include "gear_dynamics/ensemble.hpp"
+#include "gear_dynamics/engine/ensemble.hpp"
 
 #include <cmath>
 #include <sstream>
@@ -9,7 +9,7 @@ namespace {
 
 using Packet = Eigen::Array<double, Ensemble::kPacket, 1>;
 
-// Eq. 15 with MODEL.md D1/D2: backlash in stiffness and damping, Hunt-Crossley |g|.
+// Eq. 15 with doc/model.md D1/D2: backlash in stiffness and damping, Hunt-Crossley |g|.
 inline Packet acceleration(const Packet& d, const Packet& v, const Packet& load, double stiffness,
                            const Packet& q, double b, double alpha) {
   const Packet g = d - d.max(-b).min(b);

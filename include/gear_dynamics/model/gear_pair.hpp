@@ -1,21 +1,21 @@
-// Spur gear pair: the inputs of MODEL.md §3 and every quantity derived from them.
+// Spur gear pair: the inputs of doc/model.md §3 and every quantity derived from them.
 // SI units throughout (m, kg, s, N, rad). No ROS.
 #pragma once
 
 namespace gear_dynamics {
 
-// What a user sets (paper Table 1 plus MODEL.md's assumed values).
+// What a user sets (paper Table 1 plus doc/model.md's assumed values).
 struct GearInputs {
   double density = 7800.0;             // rho [kg/m^3]
   double youngs_modulus = 2.068e11;    // E [Pa]
-  double poisson_ratio = 0.3;          // nu [-] (MODEL.md D6; not used by ISO 6336 method B)
+  double poisson_ratio = 0.3;          // nu [-] (doc/model.md D6; not used by ISO 6336 method B)
   double pinion_pitch_radius = 0.020;  // r1 [m]
   double gear_pitch_radius = 0.080;    // r2 [m]
   double pressure_angle = 0.3490658503988659;  // alpha0 [rad] (20 deg)
   int pinion_teeth = 20;               // Z1
   int gear_teeth = 80;                 // Z2
   double face_width = 0.010;           // L [m]
-  double backlash = 5.0e-5;            // b [m], half clearance (MODEL.md D7)
+  double backlash = 5.0e-5;            // b [m], half clearance (doc/model.md D7)
   double addendum_coefficient = 1.0;   // h_a / m
   double dedendum_coefficient = 1.25;  // h_f / m
   double pinion_speed = 104.71975511965977;  // Omega [rad/s] (1000 rpm)
@@ -24,7 +24,7 @@ struct GearInputs {
   double mesh_phase = 0.0;             // phi0 [rad], initial mesh phase in [0, phi_n)
 };
 
-// Derived quantities, named as in MODEL.md §3.
+// Derived quantities, named as in doc/model.md §3.
 struct GearPair {
   GearInputs in;
   double module;                 // m [m]
@@ -53,7 +53,7 @@ struct GearPair {
   double friction_factor(double phi) const { return c0 + c1 * (x_b + base_radius1 * phi); }
 };
 
-// Computes every derived quantity by MODEL.md's formulas. Does not validate (see config.hpp).
+// Computes every derived quantity by doc/model.md's formulas. Does not validate (see config.hpp).
 GearPair derive(const GearInputs& in);
 
 }  // namespace gear_dynamics

@@ -1,4 +1,4 @@
-#include "gear_dynamics/observers.hpp"
+#include "gear_dynamics/engine/observers.hpp"
 
 #include <algorithm>
 #include <limits>

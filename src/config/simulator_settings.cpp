@@ -1,4 +1,4 @@
-#include "gear_dynamics/ros/simulator_settings.hpp"
+#include "gear_dynamics/config/simulator_settings.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "gear_dynamics/config.hpp"
-#include "gear_dynamics/section_reader.hpp"
+#include "gear_dynamics/config/config.hpp"
+#include "gear_dynamics/config/section_reader.hpp"
 
 namespace gear_dynamics {
 

@@ -1,9 +1,9 @@
-#include "gear_dynamics/section_reader.hpp"
+#include "gear_dynamics/config/section_reader.hpp"
 
 #include <cmath>
 #include <sstream>
 
-#include "gear_dynamics/config.hpp"
+#include "gear_dynamics/config/config.hpp"
 
 namespace gear_dynamics {
 

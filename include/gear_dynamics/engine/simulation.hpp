@@ -1,4 +1,4 @@
-// Runs a block of realizations to the end time with the standard observers (MODEL.md §8) and an
+// Runs a block of realizations to the end time with the standard observers (doc/model.md §8) and an
 // optional decimated recording: the one driver behind the CLI, the Monte Carlo batch and the tests.
 #pragma once
 
@@ -6,7 +6,7 @@
 #include <functional>
 #include <vector>
 
-#include "gear_dynamics/ensemble.hpp"
+#include "gear_dynamics/engine/ensemble.hpp"
 
 namespace gear_dynamics {
 

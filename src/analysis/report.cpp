@@ -1,4 +1,4 @@
-#include "gear_dynamics/report.hpp"
+#include "gear_dynamics/analysis/report.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -254,7 +254,7 @@ std::vector<std::string> write_report(const std::string& folder, const BatchInpu
   r << "## Center distance d over the window (Figs. 8, 9)\n\n"
        "Stochastic realizations: box-plot statistics (whiskers min–max as in Fig. 9) and the median with its "
     << pct << " interval. S1 is the deterministic run, S2 and S3 are realizations 0 and 1. The phase ensemble is "
-       "S1 repeated over 64 initial mesh phases (MODEL.md §6). The paper gives d only at μ = 0.04: "
+       "S1 repeated over 64 initial mesh phases (doc/model.md §6). The paper gives d only at μ = 0.04: "
        "S1 0.34, S2 0.44, S3 0.59.\n\n";
   r << "| μ | R | min [mm·s^-1/2] | Q1 [mm·s^-1/2] | median [" << pct << "] [mm·s^-1/2] | Q3 [mm·s^-1/2] | max [mm·s^-1/2] "
        "| d S1 [mm·s^-1/2] | d S2 | d S3 | phase ensemble median [" << pct << "] (n) [mm·s^-1/2] |\n"
@@ -270,7 +270,7 @@ std::vector<std::string> write_report(const std::string& folder, const BatchInpu
 
   r << "\n## P(d_stoch > d_det) (the paper's 93 % statement)\n\n"
        "Strict inequality. Against S1 as in the paper, and, because one deterministic trajectory is not "
-       "reproducible pathwise after about 0.1 s (MODEL.md §6), against the median d of the phase ensemble. "
+       "reproducible pathwise after about 0.1 s (doc/model.md §6), against the median d of the phase ensemble. "
        "The interval covers the sampling of the realizations only, not the uncertainty of the reference.\n\n";
   r << "| μ | d > d_S1: k/R | P [" << pct << "] (%) | paper (%) | paper inside? | d > phase median: k/R | P [" << pct
     << "] (%) |\n|---|---|---|---|---|---|---|\n";
@@ -299,7 +299,7 @@ std::vector<std::string> write_report(const std::string& folder, const BatchInpu
 
   r << "\n## Table 3 analogue: responses at T under the deterministic load\n\n"
        "S1's δ(T) and δ̇(T) beside the paper's. A single deterministic trajectory is not reproducible "
-       "pathwise (MODEL.md §6), so the phase ensemble's median and range show what the model supports.\n\n"
+       "pathwise (doc/model.md §6), so the phase ensemble's median and range show what the model supports.\n\n"
        "| μ | S1 δ(T) [mm] | paper δ [mm] | phase δ(T) median [min, max] [mm] | S1 δ̇(T) [mm/s] | paper δ̇ [mm/s] | "
        "phase δ̇(T) median [min, max] [mm/s] |\n|---|---|---|---|---|---|---|\n";
   for (const MuAnalysis& m : a.mu) {
@@ -327,7 +327,7 @@ std::vector<std::string> write_report(const std::string& folder, const BatchInpu
   }
 
   r << "\n## Time to steady state t_ss\n\n"
-       "The last time |δ − b| exceeds " << in.config.run.steady_state_tolerance << "·b (MODEL.md §8). The paper "
+       "The last time |δ − b| exceeds " << in.config.run.steady_state_tolerance << "·b (doc/model.md §8). The paper "
        "reports about 0.35 s for S1 and that S2 and S3 had not settled by 0.4 s.\n\n"
        "| μ | S1 t_ss [s] | phase median [min, max] [s] | stochastic median [" << pct << "] [s] | stochastic Q1–Q3 [s] "
        "| P(t_ss < T) [" << pct << "] (%) |\n|---|---|---|---|---|---|\n";
@@ -340,7 +340,7 @@ std::vector<std::string> write_report(const std::string& folder, const BatchInpu
   }
 
   r << "\n## PDFs at T and their joint evolution (Figs. 10–12)\n\n"
-       "Density-normalised histograms, count/(R·width), with MODEL.md's edges; the fraction of the "
+       "Density-normalised histograms, count/(R·width), with doc/model.md's edges; the fraction of the "
        "realizations outside the edges is not in any bin:\n\n| μ | δ(T) outside (%) | δ̇(T) outside (%) |\n|---|---|---|\n";
   for (const MuAnalysis& m : a.mu)
     r << "| " << num(m.mu, 2) << " | " << num(100 * m.delta_pdf.fraction_outside(), 1) << " | "

@@ -1,12 +1,12 @@
-// Kinematic mesh timing (MODEL.md D3): the mesh phase, the stiffness K(phi) and the friction
+// Kinematic mesh timing (doc/model.md D3): the mesh phase, the stiffness K(phi) and the friction
 // factor f(phi) as known functions of time, and how each integration step is split at the
-// stiffness switches (MODEL.md §5). Shared by every realization of a block.
+// stiffness switches (doc/model.md §5). Shared by every realization of a block.
 #pragma once
 
 #include <array>
 #include <cstdint>
 
-#include "gear_dynamics/gear_pair.hpp"
+#include "gear_dynamics/model/gear_pair.hpp"
 
 namespace gear_dynamics {
 

@@ -1,4 +1,4 @@
-#include "gear_dynamics/batch.hpp"
+#include "gear_dynamics/montecarlo/batch.hpp"
 
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
@@ -13,98 +13,27 @@
 #include <set>
 #include <tuple>
 
-#include "gear_dynamics/section_reader.hpp"
 
 namespace gear_dynamics {
 
 namespace {
 
-// Grid steps between recorded states at `rate` [Hz]; `rate` must give a whole number of steps
-// that divides the run, so the series ends at T.
-std::int64_t record_interval(SectionReader& in, const char* key, double rate, const ModelConfig& model) {
-  if (rate <= 0.0) return 0;
-  const double h = model.run.time_step, k = 1.0 / (rate * h);
-  const std::int64_t every = std::llround(k), total = model.run.steps();
-  if (every >= 1 && std::abs(k - static_cast<double>(every)) <= 1e-9 * k && total % every == 0)
-    return every;
-  in.error(key, " = " + SectionReader::text_of(rate) + " Hz does not fit the grid: 1 / (rate x run.time_step) = " +
-                    SectionReader::text_of(k) + " steps, which must be a whole number >= 1 that divides the run's " +
-                    std::to_string(total) + " steps (e.g. " + SectionReader::text_of(1.0 / h) + ", " +
-                    SectionReader::text_of(0.1 / h) + " or " + SectionReader::text_of(0.001 / h) + " Hz)");
-  return 0;
-}
-
-std::string run_name(double mu, const std::string& kind, std::uint32_t index) {
-  char buf[64];
-  if (kind == kKindS1) std::snprintf(buf, sizeof buf, "mu%.4f_S1", mu);
-  else if (kind == kKindPhase) std::snprintf(buf, sizeof buf, "mu%.4f_phase%02u", mu, index);
-  else std::snprintf(buf, sizeof buf, "mu%.4f_r%05u", mu, index);
-  return buf;
+std::string run_name(double mu, RunKind kind, std::uint32_t index) {
+  char buf[32];
+  if (kind == RunKind::S1) return mu_label(mu) + "_S1";
+  if (kind == RunKind::Phase) std::snprintf(buf, sizeof buf, "_phase%02u", index);
+  else std::snprintf(buf, sizeof buf, "_r%05u", index);
+  return mu_label(mu) + buf;
 }
 
 }  // namespace
-
-BatchSettings parse_batch_settings(const YAML::Node& section, const ModelConfig& model) {
-  if (!section || !section.IsMap())
-    throw ConfigError("invalid configuration: missing section 'monte_carlo' (a map of the batch settings)");
-  std::vector<std::string> errors;
-  SectionReader in(section, "monte_carlo", errors);
-  BatchSettings s;
-  // A key that is missing or bad keeps its default below; the checks that depend on it are left
-  // out, so each problem is reported once.
-  if (const auto mu = in.numbers("mu", 0.0, kMaxFrictionCoefficient, "-")) {
-    s.mu = *mu;
-    std::set<std::string> names;
-    for (double m : s.mu)
-      if (!names.insert(run_name(m, kKindS1, 0)).second)
-        in.error("mu", " = " + detail::show(section["mu"]) + " repeats " + SectionReader::text_of(m) +
-                           " (values must differ in the 4th decimal, which names the runs)");
-  }
-  const auto realizations = in.number("realizations", 1, 1e6, true, "-");
-  if (realizations) s.realizations = static_cast<std::uint32_t>(*realizations);
-  if (const auto v = in.flag("phase_ensemble")) s.phase_ensemble = *v;
-  // record_interval checks that a rate fits the grid (at most one state per step).
-  if (const auto v = in.number("record_rate", 0, 1e9, false, "Hz", /*open_lo=*/true)) {
-    s.record_rate = *v;
-    record_interval(in, "record_rate", s.record_rate, model);
-  }
-  if (const auto v = in.number("record_realizations", 0, realizations ? *realizations : 1e6, true, "-"))
-    s.record_realizations = static_cast<std::uint32_t>(*v);
-  if (const auto v = in.number("sparse_record_rate", 0, 1e9, false, "Hz (0 = no series)")) {
-    s.sparse_record_rate = *v;
-    record_interval(in, "sparse_record_rate", s.sparse_record_rate, model);
-  }
-  if (const auto v = in.text("output_dir")) s.output_dir = *v;
-  if (const auto v = in.flag("overwrite")) s.overwrite = *v;
-  const auto shard_count = in.number("shard_count", 1, 1e6, true, "-");
-  if (shard_count) s.shard_count = static_cast<int>(*shard_count);
-  if (const auto v = in.number("shard_index", 0, shard_count ? *shard_count - 1 : 1e6, true, "- (below shard_count)"))
-    s.shard_index = static_cast<int>(*v);
-  if (const auto v = in.number("block_lanes", 1, 4096, true, "lanes")) s.block_lanes = static_cast<int>(*v);
-  if (const auto v = in.number("threads", 0, 1024, true, "threads (0 = all cores)")) s.threads = static_cast<int>(*v);
-  in.finish();
-  detail::throw_if_errors(errors);
-  return s;
-}
-
-YAML::Node content_yaml(const BatchSettings& s) {
-  YAML::Node n;
-  for (double mu : s.mu) n["mu"].push_back(mu);
-  n["mu"].SetStyle(YAML::EmitterStyle::Flow);
-  n["realizations"] = s.realizations;
-  n["phase_ensemble"] = s.phase_ensemble;
-  n["record_rate"] = s.record_rate;
-  n["record_realizations"] = s.record_realizations;
-  n["sparse_record_rate"] = s.sparse_record_rate;
-  return n;
-}
 
 std::vector<RunSpec> plan_runs(const ModelConfig& model, const BatchSettings& s) {
   const double h = model.run.time_step;
   const auto every = [h](double rate) { return rate > 0.0 ? std::llround(1.0 / (rate * h)) : 0; };
   const double phase_step = derive(model.gear).mesh_period_angle / kPhaseEnsembleSize;
   std::vector<RunSpec> runs;
-  const auto add = [&](double mu, const char* kind, std::uint32_t index, double phase, double rate) {
+  const auto add = [&](double mu, RunKind kind, std::uint32_t index, double phase, double rate) {
     RunSpec r;
     r.id = runs.size();
     r.name = run_name(mu, kind, index);
@@ -116,13 +45,13 @@ std::vector<RunSpec> plan_runs(const ModelConfig& model, const BatchSettings& s)
     runs.push_back(std::move(r));
   };
   for (double mu : s.mu) {
-    add(mu, kKindS1, 0, model.gear.mesh_phase, s.record_rate);
+    add(mu, RunKind::S1, 0, model.gear.mesh_phase, s.record_rate);
     if (s.phase_ensemble) {
       for (int j = 0; j < kPhaseEnsembleSize; ++j)
-        add(mu, kKindPhase, static_cast<std::uint32_t>(j), j * phase_step, s.sparse_record_rate);
+        add(mu, RunKind::Phase, static_cast<std::uint32_t>(j), j * phase_step, s.sparse_record_rate);
     }
     for (std::uint32_t r = 0; r < s.realizations; ++r)
-      add(mu, kKindStochastic, r, model.gear.mesh_phase,
+      add(mu, RunKind::Stochastic, r, model.gear.mesh_phase,
           r < s.record_realizations ? s.record_rate : s.sparse_record_rate);
   }
   return runs;
@@ -143,7 +72,7 @@ ModelConfig run_config(const ModelConfig& model, const RunSpec& run) {
 }
 
 LaneSpec run_lane(const ModelConfig& model, const RunSpec& run) {
-  if (run.kind == kKindStochastic) return stochastic_lane(model, run.mu, run.index);
+  if (run.kind == RunKind::Stochastic) return stochastic_lane(model, run.mu, run.index);
   return deterministic_lane(model, run.mu);
 }
 

@@ -1,5 +1,5 @@
-// The gear SDE (MODEL.md §2) for a block of realizations stepped together: structure of arrays,
-// one SIMD lane per realization, RK4 with the stiffness switches split out (MODEL.md §5).
+// The gear SDE (doc/model.md §2) for a block of realizations stepped together: structure of arrays,
+// one SIMD lane per realization, RK4 with the stiffness switches split out (doc/model.md §5).
 // A single realization is a block of one lane, so the live node, the CLI and the Monte Carlo batch
 // all run this code. Every lane's arithmetic is independent of the other lanes (the build uses
 // -ffp-contract=off), so a realization's numbers do not depend on the block it runs in.
@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "gear_dynamics/gear_pair.hpp"
-#include "gear_dynamics/mesh_schedule.hpp"
-#include "gear_dynamics/normal_stream.hpp"
+#include "gear_dynamics/model/gear_pair.hpp"
+#include "gear_dynamics/model/mesh_schedule.hpp"
+#include "gear_dynamics/engine/normal_stream.hpp"
 
 namespace gear_dynamics {
 

@@ -1,4 +1,4 @@
-#include "gear_dynamics/normal_stream.hpp"
+#include "gear_dynamics/engine/normal_stream.hpp"
 
 #include <Eigen/Core>
 #include <immintrin.h>

@@ -1,4 +1,4 @@
-#include "gear_dynamics/batch_analysis.hpp"
+#include "gear_dynamics/analysis/batch_analysis.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,9 +8,9 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "gear_dynamics/batch.hpp"
-#include "gear_dynamics/config.hpp"
-#include "gear_dynamics/section_reader.hpp"
+#include "gear_dynamics/montecarlo/batch.hpp"
+#include "gear_dynamics/config/config.hpp"
+#include "gear_dynamics/config/section_reader.hpp"
 
 namespace gear_dynamics {
 
@@ -103,82 +103,6 @@ MuAnalysis analyse_mu(double mu, const std::vector<const RunRecord*>& runs, cons
 }
 
 }  // namespace
-
-const char* to_string(RunKind kind) {
-  switch (kind) {
-    case RunKind::S1: return kKindS1;
-    case RunKind::Phase: return kKindPhase;
-    case RunKind::Stochastic: return kKindStochastic;
-  }
-  return "?";
-}
-
-std::optional<RunKind> run_kind_from(const std::string& text) {
-  for (RunKind k : {RunKind::S1, RunKind::Phase, RunKind::Stochastic})
-    if (text == to_string(k)) return k;
-  return std::nullopt;
-}
-
-AnalysisSettings parse_analysis_settings(const YAML::Node& root) {
-  const YAML::Node a = root["analysis"];
-  if (!a || !a.IsMap()) throw ConfigError("invalid configuration: missing section 'analysis' (a map)");
-  std::vector<std::string> errors;
-  SectionReader in(a, "analysis", errors);
-  AnalysisSettings s;
-  if (const auto v = in.number("confidence", 0, 1, false, "-", /*open_lo=*/true, /*open_hi=*/true)) s.confidence = *v;
-  const auto interval = [&](const char* key, const std::string& unit, Interval& out) {
-    const auto v = in.numbers(key, -kInf, kInf, unit, 2);
-    if (!v) return;
-    out = {(*v)[0], (*v)[1]};
-    if (!(out.lo <= out.hi))
-      in.error(key, " = [" + SectionReader::text_of(out.lo) + ", " + SectionReader::text_of(out.hi) +
-                        "] is empty; allowed lo <= hi, in " + unit);
-  };
-  const auto bins = [&](const char* key, const std::string& unit, BinSpec& out) {
-    const auto v = in.numbers(key, -kInf, kInf, unit + " ([lo, hi, width])", 3);
-    if (!v) return;
-    out = {(*v)[0], (*v)[1], (*v)[2]};
-    try {
-      validate(out, std::string("analysis.") + key);
-    } catch (const std::invalid_argument& ex) {
-      errors.emplace_back(ex.what());
-    }
-  };
-  interval("delta_interval", "m", s.delta_interval);
-  interval("delta_dot_interval", "m/s", s.delta_dot_interval);
-  bins("delta_bins", "m", s.delta_bins);
-  bins("delta_dot_bins", "m/s", s.delta_dot_bins);
-  bins("joint_delta_bins", "m", s.joint_delta_bins);
-  bins("joint_delta_dot_bins", "m/s", s.joint_delta_dot_bins);
-  if (const auto v = in.numbers("joint_times", 0, kInf, "s")) s.joint_times = *v;
-  in.finish();
-  detail::throw_if_errors(errors);
-  return s;
-}
-
-YAML::Node to_yaml(const AnalysisSettings& s) {
-  YAML::Node a;
-  const auto list = [](std::initializer_list<double> v) {
-    YAML::Node n;
-    for (double x : v) n.push_back(x);
-    n.SetStyle(YAML::EmitterStyle::Flow);
-    return n;
-  };
-  a["confidence"] = s.confidence;
-  a["delta_interval"] = list({s.delta_interval.lo, s.delta_interval.hi});
-  a["delta_dot_interval"] = list({s.delta_dot_interval.lo, s.delta_dot_interval.hi});
-  a["delta_bins"] = list({s.delta_bins.lo, s.delta_bins.hi, s.delta_bins.width});
-  a["delta_dot_bins"] = list({s.delta_dot_bins.lo, s.delta_dot_bins.hi, s.delta_dot_bins.width});
-  a["joint_delta_bins"] = list({s.joint_delta_bins.lo, s.joint_delta_bins.hi, s.joint_delta_bins.width});
-  a["joint_delta_dot_bins"] = list({s.joint_delta_dot_bins.lo, s.joint_delta_dot_bins.hi, s.joint_delta_dot_bins.width});
-  YAML::Node t;
-  for (double x : s.joint_times) t.push_back(x);
-  t.SetStyle(YAML::EmitterStyle::Flow);
-  a["joint_times"] = t;
-  YAML::Node root;
-  root["analysis"] = a;
-  return root;
-}
 
 BatchAnalysis analyse(const std::vector<RunRecord>& runs, const AnalysisSettings& settings) {
   BatchAnalysis out;

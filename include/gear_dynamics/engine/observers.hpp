@@ -1,4 +1,4 @@
-// Online observers of a block of realizations (MODEL.md §8). They see every integration grid
+// Online observers of a block of realizations (doc/model.md §8). They see every integration grid
 // point and keep a fixed amount of memory, never the path.
 #pragma once
 
@@ -43,7 +43,7 @@ class WindowRange {
   Eigen::ArrayXd prefix_;   // blocks of the current segment before block_index_
 };
 
-// t_ss: the last grid time at which |delta - b| > tolerance, 0 if none (MODEL.md §8).
+// t_ss: the last grid time at which |delta - b| > tolerance, 0 if none (doc/model.md §8).
 class SteadyStateTime {
  public:
   SteadyStateTime(int lanes, double backlash, double tolerance);

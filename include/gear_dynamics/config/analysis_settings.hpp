@@ -1,0 +1,49 @@
+// The `analysis` section of config/aggregator.yaml: the safety intervals, histogram bins and
+// confidence level of the batch analysis (doc/model.md §8). SI units.
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace gear_dynamics {
+
+// The default confidence level of every interval reported.
+constexpr double kConfidence = 0.95;
+
+// Equal-width bin edges lo, lo + w, ..., hi, computed as lo + i (hi - lo) / n like numpy.linspace,
+// so an independent check can rebuild them. n = (hi - lo) / width must be a whole number.
+struct BinSpec {
+  double lo = 0, hi = 1, width = 1;
+  std::size_t bins() const;
+  std::vector<double> edges() const;
+};
+// Throws std::invalid_argument naming `name`, the values and the rule if the spec is unusable.
+void validate(const BinSpec& spec, const std::string& name);
+
+struct Interval {
+  double lo = 0, hi = 0;  // closed
+  bool contains(double x) const { return x >= lo && x <= hi; }
+};
+
+// The analysis parameters (the `analysis` section of config/aggregator.yaml), SI units.
+struct AnalysisSettings {
+  double confidence = kConfidence;
+  Interval delta_interval{4.0e-5, 5.5e-5};       // Table 4 [m]
+  Interval delta_dot_interval{-0.016, 0.016};    // Table 4 [m/s]
+  BinSpec delta_bins{3.0e-5, 6.0e-5, 5.0e-7};    // Fig. 11 [m]
+  BinSpec delta_dot_bins{-0.040, 0.040, 0.002};  // Fig. 12 [m/s]
+  BinSpec joint_delta_bins{3.0e-5, 6.0e-5, 1.0e-6};     // Fig. 10 [m]
+  BinSpec joint_delta_dot_bins{-0.040, 0.040, 0.004};   // Fig. 10 [m/s]
+  std::vector<double> joint_times{0.30, 0.33, 0.36, 0.40};  // Fig. 10 [s], among the snapshot times
+};
+
+// Reads and validates the `analysis` section of `root` (missing keys keep their defaults; unknown
+// keys, wrong types and bad values are errors naming the key, the value and the allowed range).
+// Throws ConfigError.
+AnalysisSettings parse_analysis_settings(const YAML::Node& root);
+YAML::Node to_yaml(const AnalysisSettings& settings);
+
+}  // namespace gear_dynamics
