@@ -10,6 +10,10 @@ status=0
 # The fault suite's sanitizer cases build workspaces of their own, so they run here, not as a target.
 /usr/bin/python3 "$GD_REPO/test/faults/sanitizers.py" "$GD_WS/build/test_results/gear_dynamics/faults-sanitizers.xml" ||
   status=1
+# Every command line of the docs, as typed (test/docs/run_doc_commands.py). Here, not as a catkin
+# target: some documented commands build the workspace, which must not happen inside catkin_make.
+/usr/bin/python3 "$GD_REPO/test/docs/run_doc_commands.py" "$GD_WS/build/test_results/gear_dynamics/doc-commands.xml" ||
+  status=1
 echo
 catkin_test_results --verbose "$GD_WS/build/test_results" || status=1
 # The fault suite's table: cases tried and passed per category (test/faults/summary.py).

@@ -1,5 +1,5 @@
 // gear_monte_carlo: runs a Monte Carlo batch (doc/model.md §4, §6) into a folder of bags (the batch
-// folder contract of PROTOCOL.md), resumable, shardable, interruptible, with progress.
+// folder contract of doc/batch-folder.md), resumable, shardable, interruptible, with progress.
 #include <ros/ros.h>
 #include <sys/resource.h>
 

@@ -1,4 +1,4 @@
-// The batch folder contract (PROTOCOL.md): one LZ4 bag per run, written as <name>.bag.active and
+// The batch folder contract (doc/batch-folder.md §4-§9): one LZ4 bag per run, written as <name>.bag.active and
 // renamed after a clean close (RunInfo first, the decimated GearState series, RunSummary last), a
 // manifest written atomically, and resume. Writer: gear_monte_carlo; reader: gear_aggregator.
 #pragma once

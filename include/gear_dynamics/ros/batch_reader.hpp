@@ -1,4 +1,4 @@
-// Reads Monte Carlo batch folders (PROTOCOL.md's batch folder contract: manifest*.yaml plus one bag
+// Reads Monte Carlo batch folders (doc/batch-folder.md §10: manifest*.yaml plus one bag
 // per run) into one fixed-size record per run, streaming each bag with rosbag::View. A bag that is
 // unfinished (.active), truncated, corrupted, of another batch or not listed is skipped with a
 // warning naming the file and the reason; listed runs without a usable bag are reported missing.

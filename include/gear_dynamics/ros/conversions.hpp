@@ -28,7 +28,7 @@ inline ros::Time sim_stamp(double t) { return ros::Time(kClockOffset + t); }
 YAML::Node yaml_from_parameters(const ros::NodeHandle& nh, const std::vector<std::string>& sections);
 ModelConfig load_model_config(const ros::NodeHandle& nh);
 
-// The batch folder contract (PROTOCOL.md): topics of a run bag and the manifest format.
+// The batch folder contract (doc/batch-folder.md §2, §5): topics of a run bag and the manifest format.
 constexpr const char* kRunInfoTopic = "/gear/run_info";
 constexpr const char* kStateTopic = "/gear/state";
 constexpr const char* kSummaryTopic = "/gear/summary";
