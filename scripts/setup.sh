@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Installs the Debian packages gear_dynamics needs (only the missing ones) and builds the catkin
 # workspace out of the source tree (GD_WS, default ~/.cache/gear_dynamics/<repo path hash>), then
-# sources it. Sourced by reproduce.sh and test.sh.
+# sources it. Sourced by reproduce.sh and test.sh, or by a user's interactive shell, whose options
+# it restores at the end (a failing command must not close that shell afterwards).
+gd_shell_options=$(set +o)
 set -euo pipefail
 
 GD_REPO=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -54,3 +56,5 @@ gd_install
 # GD_BUILD_ARGS: extra catkin_make arguments (CMake options, targets), e.g. from scripts/sanitize.sh.
 read -ra gd_build_args <<< "${GD_BUILD_ARGS:-}"
 gd_build "${gd_build_args[@]}"
+eval "$gd_shell_options"
+unset gd_shell_options
