@@ -19,7 +19,7 @@
 #     --logs DIR        where the job logs go, default <output>/../<name>_slurm_logs
 # Prints the two job ids ("array JOBID" and "aggregate JOBID").
 set -euo pipefail
-usage() { sed -n '2,22p' "$0" | sed 's/^# \{0,1\}//'; exit "${1:-2}"; }
+usage() { sed -n '2,20p' "$0" | sed 's/^# \{0,1\}//'; exit "${1:-2}"; }
 
 [ $# -ge 1 ] || usage
 case $1 in -h|--help) usage 0 ;; esac
