@@ -46,7 +46,7 @@ std::string allowed(const KeySpec& k) {
     case KeyKind::Text:
       return k.may_be_empty ? "any string" : "non-empty";
     case KeyKind::RealList:
-      return (k.size ? "" : k.may_be_empty ? "any length, " : "non-empty, ") + "each " + (range == "finite" ? range : "in " + range);
+      return std::string(k.size ? "" : k.may_be_empty ? "any length, " : "non-empty, ") + "each " + (range == "finite" ? range : "in " + range);
     case KeyKind::TextList:
       return "non-empty, each non-empty";
   }
