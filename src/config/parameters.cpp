@@ -59,9 +59,9 @@ std::string parameter_table(const SectionSpec& section) {
   std::ostringstream out;
   out << "| key | type | unit | default | allowed | meaning |\n|---|---|---|---|---|---|\n";
   for (const KeySpec& k : section.keys) {
-    const bool no_default = (k.kind == KeyKind::TextList || k.kind == KeyKind::Text || k.kind == KeyKind::RealList) &&
-                            !k.may_be_empty && k.default_value.size() == 0 &&
-                            (k.kind != KeyKind::Text || k.default_value.Scalar().empty());
+    // A required key whose default is empty where empty is refused (~folders) has none to show.
+    const YAML::Node& d = k.default_value;
+    const bool no_default = !k.may_be_empty && (d.IsSequence() ? d.size() == 0 : d.Scalar().empty());
     out << "| `" << section.prefix << k.name << "` | " << k.type() << " | " << k.unit << " | "
         << (no_default ? "required" : "`" + shown(k, k.default_value) + "`") << (k.required ? "" : " (optional)")
         << " | " << allowed(k) << " | " << k.doc << " |\n";
