@@ -63,7 +63,7 @@ struct KeySpec {
   std::string allowed() const;
   // What a value must be, e.g. "a number in (0, inf) m", "true or false", "a list of 3 numbers in ...".
   std::string expected() const;
-  // The type as the docs name it: real, integer, flag, text, list of reals, [lo, hi], ...
+  // The type as the docs name it: real, integer, bool, string, list of (2) reals, ...
   std::string type() const;
 };
 
