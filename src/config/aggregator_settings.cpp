@@ -14,24 +14,24 @@ std::string AggregatorSettings::report_dir() const {
 const Section<AggregatorSettings>& aggregator_section() {
   static const Section<AggregatorSettings> section =
       Section<AggregatorSettings>("aggregator", "~")
-          .key("folders", GD_MEMBER(folders), "batch folder, or a list of them (the shards of one batch)")
-          .key("report_folder", GD_MEMBER(report_folder), "where the report goes; empty: FIRST_FOLDER/report")
+          .key("folders", GD_MEMBER(folders), "batch folder(s); several folders (or one that several shards wrote into) merge into one report")
+          .key("report_folder", GD_MEMBER(report_folder), "where report.md, the CSV files and the figures go (created if missing); empty: FIRST_FOLDER/report")
           .optional()
           .may_be_empty()
-          .key("wait_for_batch", GD_MEMBER(wait_for_batch), "wait until every listed bag exists, or the batch node has ended")
+          .key("wait_for_batch", GD_MEMBER(wait_for_batch), "wait until every run the manifests list has its bag, or until batch_node has come and gone")
           .optional()
           .key("batch_node", GD_MEMBER(batch_node), "the batch node to watch while waiting")
           .optional()
           .key("wait_timeout", GD_MEMBER(wait_timeout), closed_open(0, kInf), "s",
-               "give up waiting after this long; 0 = no limit")
+               "give up waiting after this long (exit status 1); 0 = no limit")
           .optional()
-          .key("plot_script", GD_MEMBER(plot_script), "figure script run on the report folder; empty: no figures")
+          .key("plot_script", GD_MEMBER(plot_script), "the figure script (aggregator.launch sets scripts/plot_report.py unless plot:=false); empty: no figures")
           .optional()
           .may_be_empty()
           .key("series_mu", GD_MEMBER(series_mu), closed(0, kMaxFrictionCoefficient), "-",
                "mu whose S1, S2, S3 series go to series.csv (Figs. 5-7)")
           .optional()
-          .key("exit_when_done", GD_MEMBER(exit_when_done), "exit after the report instead of latching it")
+          .key("exit_when_done", GD_MEMBER(exit_when_done), "exit after the report instead of keeping the latched topic")
           .optional();
   return section;
 }

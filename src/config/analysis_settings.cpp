@@ -63,14 +63,14 @@ const Section<AnalysisSettings>& analysis_section() {
           .key("delta_dot_interval", GD_MEMBER(delta_dot_interval), any_number(), "m/s",
                "Table 4 safety interval [lo, hi] of delta_dot(T), closed, lo <= hi")
           .key("delta_bins", GD_MEMBER(delta_bins), any_number(), "m",
-               "Fig. 11 histogram [lo, hi, width], a whole number of bins (at most 1e6)")
-          .key("delta_dot_bins", GD_MEMBER(delta_dot_bins), any_number(), "m/s", "Fig. 12 histogram [lo, hi, width]")
+               "Fig. 11 histogram of delta(T) [lo, hi, width]: lo < hi, width in (0, hi - lo], a whole number of bins <= 1e6")
+          .key("delta_dot_bins", GD_MEMBER(delta_dot_bins), any_number(), "m/s", "Fig. 12 histogram of delta_dot(T) [lo, hi, width], as delta_bins")
           .key("joint_delta_bins", GD_MEMBER(joint_delta_bins), any_number(), "m",
-               "Fig. 10 joint histogram, delta axis [lo, hi, width]")
+               "Fig. 10 joint histogram, delta axis [lo, hi, width], as delta_bins")
           .key("joint_delta_dot_bins", GD_MEMBER(joint_delta_dot_bins), any_number(), "m/s",
-               "Fig. 10 joint histogram, delta_dot axis [lo, hi, width]")
+               "Fig. 10 joint histogram, delta_dot axis [lo, hi, width], as delta_bins")
           .key("joint_times", GD_MEMBER(joint_times), closed_open(0, kInf), "s",
-               "Fig. 10 snapshot times, among the batch's run.snapshot_times");
+               "Fig. 10 snapshot times, each among the batch's run.snapshot_times (checked when the runs are analysed)");
   return section;
 }
 

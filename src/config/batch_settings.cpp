@@ -40,23 +40,23 @@ const Section<BatchSettings>& batch_section() {
       Section<BatchSettings>("monte_carlo", "monte_carlo.")
           // What the batch holds: the manifest records these and resume compares them.
           .key("mu", GD_MEMBER(mu), closed(0, kMaxFrictionCoefficient), "-",
-               "friction coefficients of the sweep, distinct in the 4th decimal (which names the runs)")
-          .key("realizations", GD_MEMBER(realizations), closed(1, 1e6), "-", "R, stochastic realizations 0..R-1 per mu")
-          .key("phase_ensemble", GD_MEMBER(phase_ensemble), "S1 repeated over phi0 = j phi_n / 64, j = 0..63")
+               "friction coefficients, distinct in the 4th decimal (they name the runs)")
+          .key("realizations", GD_MEMBER(realizations), closed(1, 1e6), "-", "R, stochastic realizations 0..R-1 per mu (S2 = 0, S3 = 1)")
+          .key("phase_ensemble", GD_MEMBER(phase_ensemble), "the deterministic phase ensemble per mu: S1 at phi0 = j phi_n / 64, j = 0..63")
           .key("record_rate", GD_MEMBER(record_rate), open_closed(0, 1e9), "Hz",
-               "series of S1 and realizations < record_realizations; 1 / (rate h) whole steps dividing the run")
+               "GearState series of S1 and of the realizations < record_realizations; 1/(rate h) a whole number of steps that divides T/h")
           .key("record_realizations", GD_MEMBER(record_realizations), closed(0, 1e6), "-",
                "realizations recorded at record_rate (S2, S3); at most realizations")
           .key("sparse_record_rate", GD_MEMBER(sparse_record_rate), closed(0, 1e9), "Hz",
-               "coarse series of every other run, 0 = none; fits the grid as record_rate")
+               "series of every other run; 0 = none, else it fits the grid as record_rate does")
           // How it runs: no effect on any bag's content.
-          .key("output_dir", GD_MEMBER(output_dir), "batch folder; relative to the node's working directory")
+          .key("output_dir", GD_MEMBER(output_dir), "the batch folder; a relative path is taken from the node's working directory ($ROS_HOME under roslaunch)")
           .key("overwrite", GD_MEMBER(overwrite), "replace a folder that holds another batch")
           .key("shard_index", GD_MEMBER(shard_index), closed(0, kMaxShards - 1), "-",
-               "this process runs the runs i with i % shard_count == shard_index")
+               "this process runs the runs i with i mod shard_count = shard_index; below shard_count")
           .key("shard_count", GD_MEMBER(shard_count), closed(1, kMaxShards), "-", "number of shards")
-          .key("block_lanes", GD_MEMBER(block_lanes), closed(1, 4096), "lanes", "realizations stepped together")
-          .key("threads", GD_MEMBER(threads), closed(0, 1024), "-", "worker threads, 0 = all cores");
+          .key("block_lanes", GD_MEMBER(block_lanes), closed(1, 4096), "lanes", "runs stepped together (SIMD lanes; larger blocks amortise the per-step work)")
+          .key("threads", GD_MEMBER(threads), closed(0, 1024), "-", "worker threads; 0 = all cores available to the process");
   return section;
 }
 

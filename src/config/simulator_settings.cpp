@@ -14,17 +14,17 @@ const Section<SimulatorSettings>& simulator_section() {
   static const Section<SimulatorSettings> section =
       Section<SimulatorSettings>("simulator", "simulator.")
           .key("deterministic", GD_MEMBER(deterministic),
-               "the deterministic load S1 (Phi = load.initial_mean) instead of a stochastic realization")
+               "true: the deterministic load S1 (Phi = load.initial_mean, sigma = lambda = 0); false: a stochastic realization")
           .key("realization", GD_MEMBER(realization), closed(0, std::numeric_limits<std::int32_t>::max()), "-",
                "random stream of the stochastic load (S2 = 0, S3 = 1)")
           .key("publish_rate", GD_MEMBER(publish_rate), closed(kMinPublishRate, kMaxPublishRate), "Hz",
-               "state and Float64 topics per simulated second; at most 1/run.time_step")
+               "rate of state and the Float64 topics in simulated time; at most 1/run.time_step")
           .key("publish_scalars", GD_MEMBER(publish_scalars), "also publish delta, delta_dot, phi, center_distance as Float64")
           .key("publish_clock", GD_MEMBER(publish_clock), "publish /clock = simulated time + 1 s")
           .key("real_time_factor", GD_MEMBER(real_time_factor), closed(0, kMaxRealTimeFactor), "-",
-               "simulated s per wall s, 0 = as fast as possible")
+               "simulated seconds per wall second; 0 = as fast as possible")
           .key("t_end", GD_MEMBER(t_end), closed(0, 1e6), "s",
-               "simulated time at which the run stops, a whole number of steps; 0 = run on forever")
+               "where the run stops, a whole number of time steps; 0 = run on forever")
           .key("loop", GD_MEMBER(loop), "at t_end start over (as ~reset) instead of stopping; needs t_end > 0")
           .key("paused", GD_MEMBER(paused), "start paused (then ~unpause or ~step)");
   return section;
