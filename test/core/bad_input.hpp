@@ -89,10 +89,6 @@ inline bool is_number(const YAML::Node& n) {
   }
 }
 
-inline bool is_bool(const YAML::Node& n) {
-  return n.IsScalar() && (n.Scalar() == "true" || n.Scalar() == "false");
-}
-
 // Values just outside the range (at an open bound, one step past a closed one), and -1 and 0
 // where the range says a sign is meaningless: each with its category.
 inline std::vector<std::pair<std::string, double>> outside(const Range& r, bool integer) {
