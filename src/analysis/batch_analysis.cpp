@@ -10,7 +10,6 @@
 
 #include "gear_dynamics/montecarlo/batch.hpp"
 #include "gear_dynamics/config/config.hpp"
-#include "gear_dynamics/config/section_reader.hpp"
 
 namespace gear_dynamics {
 

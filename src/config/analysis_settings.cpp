@@ -6,13 +6,8 @@
 #include <stdexcept>
 
 #include "gear_dynamics/config/config.hpp"
-#include "gear_dynamics/config/section_reader.hpp"
 
 namespace gear_dynamics {
-
-namespace {
-constexpr double kInf = std::numeric_limits<double>::infinity();
-}  // namespace
 
 std::size_t BinSpec::bins() const { return static_cast<std::size_t>(std::llround((hi - lo) / width)); }
 
@@ -43,64 +38,84 @@ void validate(const BinSpec& s, const std::string& name) {
   throw std::invalid_argument(e.str());
 }
 
+// An interval is the list [lo, hi], a BinSpec [lo, hi, width].
+template <>
+struct Codec<Interval> {
+  static constexpr KeyKind kind = KeyKind::RealList;
+  static constexpr std::size_t size = 2;
+  static void set(Interval& m, const Value& v) { m = {v.numbers[0], v.numbers[1]}; }
+  static YAML::Node get(const Interval& m) { return flow_list(std::vector<double>{m.lo, m.hi}); }
+};
+template <>
+struct Codec<BinSpec> {
+  static constexpr KeyKind kind = KeyKind::RealList;
+  static constexpr std::size_t size = 3;
+  static void set(BinSpec& m, const Value& v) { m = {v.numbers[0], v.numbers[1], v.numbers[2]}; }
+  static YAML::Node get(const BinSpec& m) { return flow_list(std::vector<double>{m.lo, m.hi, m.width}); }
+};
+
+const Section<AnalysisSettings>& analysis_section() {
+  static const Section<AnalysisSettings> section =
+      Section<AnalysisSettings>("analysis", "analysis.")
+          .key("confidence", GD_MEMBER(confidence), open(0, 1), "-", "level of every interval (Wilson, median)")
+          .key("delta_interval", GD_MEMBER(delta_interval), any_number(), "m",
+               "Table 4 safety interval [lo, hi] of delta(T), closed, lo <= hi")
+          .key("delta_dot_interval", GD_MEMBER(delta_dot_interval), any_number(), "m/s",
+               "Table 4 safety interval [lo, hi] of delta_dot(T), closed, lo <= hi")
+          .key("delta_bins", GD_MEMBER(delta_bins), any_number(), "m",
+               "Fig. 11 histogram of delta(T) [lo, hi, width]: lo < hi, width in (0, hi - lo], a whole number of bins <= 1e6")
+          .key("delta_dot_bins", GD_MEMBER(delta_dot_bins), any_number(), "m/s", "Fig. 12 histogram of delta_dot(T) [lo, hi, width], as delta_bins")
+          .key("joint_delta_bins", GD_MEMBER(joint_delta_bins), any_number(), "m",
+               "Fig. 10 joint histogram, delta axis [lo, hi, width], as delta_bins")
+          .key("joint_delta_dot_bins", GD_MEMBER(joint_delta_dot_bins), any_number(), "m/s",
+               "Fig. 10 joint histogram, delta_dot axis [lo, hi, width], as delta_bins")
+          .key("joint_times", GD_MEMBER(joint_times), closed_open(0, kInf), "s",
+               "Fig. 10 snapshot times, each among the batch's run.snapshot_times (checked when the runs are analysed)");
+  return section;
+}
+
 AnalysisSettings parse_analysis_settings(const YAML::Node& root) {
-  const YAML::Node a = root["analysis"];
-  if (!a || !a.IsMap()) throw ConfigError("invalid configuration: missing section 'analysis' (a map)");
   std::vector<std::string> errors;
-  SectionReader in(a, "analysis", errors);
+  const AnalysisSettings s = read_analysis_settings(root, errors);
+  detail::throw_if_errors(errors);
+  return s;
+}
+
+AnalysisSettings read_analysis_settings(const YAML::Node& root, std::vector<std::string>& errors) {
   AnalysisSettings s;
-  if (const auto v = in.number("confidence", 0, 1, false, "-", /*open_lo=*/true, /*open_hi=*/true)) s.confidence = *v;
-  const auto interval = [&](const char* key, const std::string& unit, Interval& out) {
-    const auto v = in.numbers(key, -kInf, kInf, unit, 2);
-    if (!v) return;
-    out = {(*v)[0], (*v)[1]};
-    if (!(out.lo <= out.hi))
-      in.error(key, " = [" + SectionReader::text_of(out.lo) + ", " + SectionReader::text_of(out.hi) +
+  const YAML::Node a = root["analysis"];
+  if (!a || !a.IsMap()) {
+    errors.push_back("missing section 'analysis' (a map of the analysis settings, config/aggregator.yaml)");
+    return s;
+  }
+  SectionReader in(a, "analysis.", errors);
+  analysis_section().read(in, s);
+  // What a list's elements must satisfy together, for the lists that are good.
+  const auto interval = [&](const char* key, const char* unit, const Interval& v) {
+    if (in.ok(key) && !(v.lo <= v.hi))
+      in.error(key, " = [" + SectionReader::text_of(v.lo) + ", " + SectionReader::text_of(v.hi) +
                         "] is empty; allowed lo <= hi, in " + unit);
   };
-  const auto bins = [&](const char* key, const std::string& unit, BinSpec& out) {
-    const auto v = in.numbers(key, -kInf, kInf, unit + " ([lo, hi, width])", 3);
-    if (!v) return;
-    out = {(*v)[0], (*v)[1], (*v)[2]};
+  const auto bins = [&](const char* key, const BinSpec& v) {
     try {
-      validate(out, std::string("analysis.") + key);
+      if (in.ok(key)) validate(v, in.prefix() + key);
     } catch (const std::invalid_argument& ex) {
       errors.emplace_back(ex.what());
     }
   };
   interval("delta_interval", "m", s.delta_interval);
   interval("delta_dot_interval", "m/s", s.delta_dot_interval);
-  bins("delta_bins", "m", s.delta_bins);
-  bins("delta_dot_bins", "m/s", s.delta_dot_bins);
-  bins("joint_delta_bins", "m", s.joint_delta_bins);
-  bins("joint_delta_dot_bins", "m/s", s.joint_delta_dot_bins);
-  if (const auto v = in.numbers("joint_times", 0, kInf, "s")) s.joint_times = *v;
+  bins("delta_bins", s.delta_bins);
+  bins("delta_dot_bins", s.delta_dot_bins);
+  bins("joint_delta_bins", s.joint_delta_bins);
+  bins("joint_delta_dot_bins", s.joint_delta_dot_bins);
   in.finish();
-  detail::throw_if_errors(errors);
   return s;
 }
 
 YAML::Node to_yaml(const AnalysisSettings& s) {
-  YAML::Node a;
-  const auto list = [](std::initializer_list<double> v) {
-    YAML::Node n;
-    for (double x : v) n.push_back(x);
-    n.SetStyle(YAML::EmitterStyle::Flow);
-    return n;
-  };
-  a["confidence"] = s.confidence;
-  a["delta_interval"] = list({s.delta_interval.lo, s.delta_interval.hi});
-  a["delta_dot_interval"] = list({s.delta_dot_interval.lo, s.delta_dot_interval.hi});
-  a["delta_bins"] = list({s.delta_bins.lo, s.delta_bins.hi, s.delta_bins.width});
-  a["delta_dot_bins"] = list({s.delta_dot_bins.lo, s.delta_dot_bins.hi, s.delta_dot_bins.width});
-  a["joint_delta_bins"] = list({s.joint_delta_bins.lo, s.joint_delta_bins.hi, s.joint_delta_bins.width});
-  a["joint_delta_dot_bins"] = list({s.joint_delta_dot_bins.lo, s.joint_delta_dot_bins.hi, s.joint_delta_dot_bins.width});
-  YAML::Node t;
-  for (double x : s.joint_times) t.push_back(x);
-  t.SetStyle(YAML::EmitterStyle::Flow);
-  a["joint_times"] = t;
   YAML::Node root;
-  root["analysis"] = a;
+  root["analysis"] = analysis_section().to_yaml(s);
   return root;
 }
 

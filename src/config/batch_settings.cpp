@@ -4,7 +4,6 @@
 #include <cstdio>
 #include <set>
 
-#include "gear_dynamics/config/section_reader.hpp"
 
 namespace gear_dynamics {
 
@@ -33,58 +32,67 @@ std::string mu_label(double mu) {
   return buf;
 }
 
+// At most this many shards; shard_index lies below shard_count.
+constexpr double kMaxShards = 1e6;
+
+const Section<BatchSettings>& batch_section() {
+  static const Section<BatchSettings> section =
+      Section<BatchSettings>("monte_carlo", "monte_carlo.")
+          // What the batch holds: the manifest records these and resume compares them.
+          .key("mu", GD_MEMBER(mu), closed(0, kMaxFrictionCoefficient), "-",
+               "friction coefficients, distinct in the 4th decimal (they name the runs)")
+          .key("realizations", GD_MEMBER(realizations), closed(1, 1e6), "-", "R, stochastic realizations 0..R-1 per mu (S2 = 0, S3 = 1)")
+          .key("phase_ensemble", GD_MEMBER(phase_ensemble), "the deterministic phase ensemble per mu: S1 at phi0 = j phi_n / 64, j = 0..63")
+          .key("record_rate", GD_MEMBER(record_rate), open_closed(0, 1e9), "Hz",
+               "GearState series of S1 and of the realizations < record_realizations; 1/(rate h) a whole number of steps that divides T/h")
+          .key("record_realizations", GD_MEMBER(record_realizations), closed(0, 1e6), "-",
+               "realizations recorded at record_rate (S2, S3); at most realizations")
+          .key("sparse_record_rate", GD_MEMBER(sparse_record_rate), closed(0, 1e9), "Hz",
+               "series of every other run; 0 = none, else it fits the grid as record_rate does")
+          // How it runs: no effect on any bag's content.
+          .key("output_dir", GD_MEMBER(output_dir), "the batch folder; a relative path is taken from the node's working directory ($ROS_HOME under roslaunch)")
+          .key("overwrite", GD_MEMBER(overwrite), "replace a folder that holds another batch")
+          .key("shard_index", GD_MEMBER(shard_index), closed(0, kMaxShards - 1), "-",
+               "this process runs the runs i with i mod shard_count = shard_index; below shard_count")
+          .key("shard_count", GD_MEMBER(shard_count), closed(1, kMaxShards), "-", "number of shards")
+          .key("block_lanes", GD_MEMBER(block_lanes), closed(1, 4096), "lanes", "runs stepped together (SIMD lanes; larger blocks amortise the per-step work)")
+          .key("threads", GD_MEMBER(threads), closed(0, 1024), "-", "worker threads; 0 = all cores available to the process");
+  return section;
+}
+
 BatchSettings parse_batch_settings(const YAML::Node& section, const ModelConfig& model) {
   if (!section || !section.IsMap())
     throw ConfigError("invalid configuration: missing section 'monte_carlo' (a map of the batch settings)");
   std::vector<std::string> errors;
-  SectionReader in(section, "monte_carlo", errors);
+  SectionReader in(section, "monte_carlo.", errors);
   BatchSettings s;
-  // A key that is missing or bad keeps its default below; the checks that depend on it are left
-  // out, so each problem is reported once.
-  if (const auto mu = in.numbers("mu", 0.0, kMaxFrictionCoefficient, "-")) {
-    s.mu = *mu;
+  batch_section().read(in, s);
+  // Checks between keys, each only when the keys it needs are good (each problem is reported once).
+  if (in.ok("mu")) {
     std::set<std::string> names;
     for (double m : s.mu)
       if (!names.insert(mu_label(m)).second)
         in.error("mu", " = " + detail::show(section["mu"]) + " repeats " + SectionReader::text_of(m) +
                            " (values must differ in the 4th decimal, which names the runs)");
   }
-  const auto realizations = in.number("realizations", 1, 1e6, true, "-");
-  if (realizations) s.realizations = static_cast<std::uint32_t>(*realizations);
-  if (const auto v = in.flag("phase_ensemble")) s.phase_ensemble = *v;
-  // record_interval checks that a rate fits the grid (at most one state per step).
-  if (const auto v = in.number("record_rate", 0, 1e9, false, "Hz", /*open_lo=*/true)) {
-    s.record_rate = *v;
-    record_interval(in, "record_rate", s.record_rate, model);
-  }
-  if (const auto v = in.number("record_realizations", 0, realizations ? *realizations : 1e6, true, "-"))
-    s.record_realizations = static_cast<std::uint32_t>(*v);
-  if (const auto v = in.number("sparse_record_rate", 0, 1e9, false, "Hz (0 = no series)")) {
-    s.sparse_record_rate = *v;
-    record_interval(in, "sparse_record_rate", s.sparse_record_rate, model);
-  }
-  if (const auto v = in.text("output_dir")) s.output_dir = *v;
-  if (const auto v = in.flag("overwrite")) s.overwrite = *v;
-  const auto shard_count = in.number("shard_count", 1, 1e6, true, "-");
-  if (shard_count) s.shard_count = static_cast<int>(*shard_count);
-  if (const auto v = in.number("shard_index", 0, shard_count ? *shard_count - 1 : 1e6, true, "- (below shard_count)"))
-    s.shard_index = static_cast<int>(*v);
-  if (const auto v = in.number("block_lanes", 1, 4096, true, "lanes")) s.block_lanes = static_cast<int>(*v);
-  if (const auto v = in.number("threads", 0, 1024, true, "threads (0 = all cores)")) s.threads = static_cast<int>(*v);
+  if (in.ok("record_rate")) record_interval(in, "record_rate", s.record_rate, model);
+  if (in.ok("sparse_record_rate")) record_interval(in, "sparse_record_rate", s.sparse_record_rate, model);
+  if (in.ok("realizations") && in.ok("record_realizations") && s.record_realizations > s.realizations)
+    in.error("record_realizations", " = " + std::to_string(s.record_realizations) + " is out of range; allowed [0, " +
+                                        std::to_string(s.realizations) + "] (integer) (at most realizations)");
+  if (in.ok("shard_count") && in.ok("shard_index") && s.shard_index >= s.shard_count)
+    in.error("shard_index", " = " + std::to_string(s.shard_index) + " is out of range; allowed [0, " +
+                                std::to_string(s.shard_count - 1) + "] (integer) (below shard_count)");
   in.finish();
   detail::throw_if_errors(errors);
   return s;
 }
 
 YAML::Node content_yaml(const BatchSettings& s) {
+  const YAML::Node all = batch_section().to_yaml(s);
   YAML::Node n;
-  for (double mu : s.mu) n["mu"].push_back(mu);
-  n["mu"].SetStyle(YAML::EmitterStyle::Flow);
-  n["realizations"] = s.realizations;
-  n["phase_ensemble"] = s.phase_ensemble;
-  n["record_rate"] = s.record_rate;
-  n["record_realizations"] = s.record_realizations;
-  n["sparse_record_rate"] = s.sparse_record_rate;
+  for (const char* key : {"mu", "realizations", "phase_ensemble", "record_rate", "record_realizations", "sparse_record_rate"})
+    n[key] = all[key];
   return n;
 }
 

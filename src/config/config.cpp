@@ -1,171 +1,68 @@
 #include "gear_dynamics/config/config.hpp"
 
 #include <cmath>
-#include <functional>
-#include <limits>
 #include <sstream>
 
 namespace gear_dynamics {
 
-namespace detail {
-
-std::string show(const YAML::Node& n) {
-  YAML::Emitter e;
-  e << YAML::Flow << n;
-  return e.c_str();
-}
-
-bool as_number(const YAML::Node& n, double& out) {
-  if (!n.IsScalar()) return false;
-  const std::string& s = n.Scalar();
-  if (s == "true" || s == "false" || s == "True" || s == "False") return false;
-  try {
-    out = n.as<double>();
-    return true;
-  } catch (const YAML::Exception&) {
-    return false;
-  }
-}
-
-void throw_if_errors(const std::vector<std::string>& errors) {
-  if (errors.empty()) return;
-  std::string all = "invalid configuration:";
-  for (const auto& m : errors) all += "\n  " + m;
-  throw ConfigError(all);
-}
-
-}  // namespace detail
-
 namespace {
 
-using detail::as_number;
-using detail::show;
+constexpr double kPi = 3.14159265358979323846;
 using detail::throw_if_errors;
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr double kPi = 3.14159265358979323846;
+}  // namespace
 
-using Kind = KeyKind;
-
-// One key of the schema: its range (closed unless `open_*`), unit and where it goes.
-struct Field {
-  const char* key;
-  Kind kind;
-  double lo, hi;
-  bool open_lo, open_hi;
-  const char* unit;
-  std::function<void(ModelConfig&, double)> set;                       // Real, Integer
-  std::function<void(ModelConfig&, const std::vector<double>&)> set_list;  // RealList
-  std::function<YAML::Node(const ModelConfig&)> get;
-};
-
-struct Section {
-  const char* name;
-  std::vector<Field> fields;
-};
-
-// A real-valued key stored in the member that `ref` returns.
-Field real(const char* key, double lo, double hi, bool open_lo, bool open_hi, const char* unit,
-           double& (*ref)(ModelConfig&)) {
-  return Field{key, Kind::Real, lo, hi, open_lo, open_hi, unit,
-               [ref](ModelConfig& c, double v) { ref(c) = v; }, nullptr,
-               [ref](const ModelConfig& c) { return YAML::Node(ref(const_cast<ModelConfig&>(c))); }};
-}
-
-#define GD_REAL(key, lo, hi, olo, ohi, unit, member) \
-  real(key, lo, hi, olo, ohi, unit, [](ModelConfig& c) -> double& { return c.member; })
-
-Field integer(const char* key, double lo, double hi, const char* unit,
-              std::function<void(ModelConfig&, double)> set,
-              std::function<YAML::Node(const ModelConfig&)> get) {
-  return Field{key, Kind::Integer, lo, hi, false, false, unit, std::move(set), nullptr, std::move(get)};
-}
-
-const std::vector<Section>& schema() {
-  static const std::vector<Section> sections = {
-      {"gear_pair",
-       {GD_REAL("density", 0, kInf, true, true, "kg/m^3", gear.density),
-        GD_REAL("youngs_modulus", 0, kInf, true, true, "Pa", gear.youngs_modulus),
-        GD_REAL("poisson_ratio", 0, 0.5, false, true, "-", gear.poisson_ratio),
-        GD_REAL("pinion_pitch_radius", 0, kInf, true, true, "m", gear.pinion_pitch_radius),
-        GD_REAL("gear_pitch_radius", 0, kInf, true, true, "m", gear.gear_pitch_radius),
-        GD_REAL("pressure_angle", 0, kPi / 4, true, false, "rad", gear.pressure_angle),
-        integer("pinion_teeth", 5, 10000, "-",
-                [](ModelConfig& c, double v) { c.gear.pinion_teeth = static_cast<int>(v); },
-                [](const ModelConfig& c) { return YAML::Node(c.gear.pinion_teeth); }),
-        integer("gear_teeth", 5, 10000, "-",
-                [](ModelConfig& c, double v) { c.gear.gear_teeth = static_cast<int>(v); },
-                [](const ModelConfig& c) { return YAML::Node(c.gear.gear_teeth); }),
-        GD_REAL("face_width", 0, kInf, true, true, "m", gear.face_width),
-        GD_REAL("backlash", 0, 1e-3, false, false, "m", gear.backlash),
-        GD_REAL("addendum_coefficient", 0, 2, true, false, "-", gear.addendum_coefficient),
-        GD_REAL("dedendum_coefficient", 0, 2, true, false, "-", gear.dedendum_coefficient),
-        GD_REAL("pinion_speed", 0, 1e4, false, false, "rad/s", gear.pinion_speed),
-        GD_REAL("damping_ratio", 0, 1, false, false, "-", gear.damping_ratio),
-        GD_REAL("reference_load", 0, kInf, true, true, "N", gear.reference_load),
-        GD_REAL("mesh_phase", 0, 2 * kPi, false, true, "rad", gear.mesh_phase),
-        GD_REAL("friction_coefficient", 0, kMaxFrictionCoefficient, false, false, "-", friction_coefficient),
-        GD_REAL("initial_deflection", -1e-2, 1e-2, false, false, "m", initial.deflection),
-        GD_REAL("initial_velocity", -10, 10, false, false, "m/s", initial.velocity)}},
-      {"load",
-       {GD_REAL("initial_mean", -1e4, 1e4, false, false, "m/s^2", load.initial_mean),
-        GD_REAL("initial_sd", 0, 1e4, false, false, "m/s^2", load.initial_sd),
-        GD_REAL("drift", -kMaxLoadDrift, kMaxLoadDrift, false, false, "m/s^3", load.drift),
-        GD_REAL("sigma", 0, kMaxLoadSigma, false, false, "m/s^2/sqrt(s)", load.sigma)}},
-      {"run",
-       {GD_REAL("time_step", 0, 1e-4, true, false, "s", run.time_step),
-        GD_REAL("duration", 0, 1e4, true, false, "s", run.duration),
-        // Below 2^53: every accepted seed is exact as a double (YAML numbers are read as one).
-        integer("seed", 0, 9007199254740991.0, "-",
-                [](ModelConfig& c, double v) { c.seed = static_cast<std::uint64_t>(v); },
-                [](const ModelConfig& c) { return YAML::Node(c.seed); }),
-        GD_REAL("window", 0, kInf, true, true, "s", run.window),
-        Field{"snapshot_times", Kind::RealList, 0, kInf, false, true, "s", nullptr,
-              [](ModelConfig& c, const std::vector<double>& v) { c.run.snapshot_times = v; },
-              [](const ModelConfig& c) {
-                YAML::Node n;
-                for (double t : c.run.snapshot_times) n.push_back(t);
-                n.SetStyle(YAML::EmitterStyle::Flow);
-                return n;
-              }},
-        GD_REAL("steady_state_tolerance", 0, 1, true, false, "fraction of b", run.steady_state_tolerance),
-        GD_REAL("steady_state_tolerance_fine", 0, 1, true, false, "fraction of b",
-                run.steady_state_tolerance_fine)}},
+const std::vector<Section<ModelConfig>>& model_sections() {
+  static const std::vector<Section<ModelConfig>> sections = {
+      Section<ModelConfig>("gear_pair", "gear_pair.")
+          .key("density", GD_MEMBER(gear.density), open(0, kInf), "kg/m^3", "rho, material density")
+          .key("youngs_modulus", GD_MEMBER(gear.youngs_modulus), open(0, kInf), "Pa", "E, Young's modulus")
+          .key("poisson_ratio", GD_MEMBER(gear.poisson_ratio), closed_open(0, 0.5), "-",
+               "nu, Poisson's ratio (not used by the stiffness model)")
+          .key("pinion_pitch_radius", GD_MEMBER(gear.pinion_pitch_radius), open(0, kInf), "m", "r1, pinion pitch radius")
+          .key("gear_pitch_radius", GD_MEMBER(gear.gear_pitch_radius), open(0, kInf), "m", "r2, gear pitch radius")
+          .key("pressure_angle", GD_MEMBER(gear.pressure_angle), open_closed(0, kPi / 4), "rad", "alpha0, pressure angle")
+          .key("pinion_teeth", GD_MEMBER(gear.pinion_teeth), closed(5, 10000), "-", "Z1, pinion teeth")
+          .key("gear_teeth", GD_MEMBER(gear.gear_teeth), closed(5, 10000), "-", "Z2, gear teeth")
+          .key("face_width", GD_MEMBER(gear.face_width), open(0, kInf), "m", "L, face width")
+          .key("backlash", GD_MEMBER(gear.backlash), closed(0, 1e-3), "m", "b, half the clearance of Eq. 17")
+          .key("addendum_coefficient", GD_MEMBER(gear.addendum_coefficient), open_closed(0, 2), "-",
+               "h_a/m; with the teeth and angle the contact ratio must lie in (1, 2)")
+          .key("dedendum_coefficient", GD_MEMBER(gear.dedendum_coefficient), open_closed(0, 2), "-", "h_f/m")
+          .key("pinion_speed", GD_MEMBER(gear.pinion_speed), closed(0, 1e4), "rad/s",
+               "Omega, pinion speed; a time step must not span a stiffness interval")
+          .key("damping_ratio", GD_MEMBER(gear.damping_ratio), closed(0, 1), "-", "zeta_ref at reference_load")
+          .key("reference_load", GD_MEMBER(gear.reference_load), open(0, kInf), "N", "F_ref at which damping_ratio holds")
+          .key("mesh_phase", GD_MEMBER(gear.mesh_phase), closed_open(0, 2 * kPi), "rad",
+               "phi0, initial mesh phase; below one mesh period 2 pi / pinion_teeth")
+          .key("friction_coefficient", GD_MEMBER(friction_coefficient), closed(0, kMaxFrictionCoefficient), "-",
+               "mu, tooth friction coefficient")
+          .key("initial_deflection", GD_MEMBER(initial.deflection), closed(-1e-2, 1e-2), "m", "delta(0)")
+          .key("initial_velocity", GD_MEMBER(initial.velocity), closed(-10, 10), "m/s", "delta_dot(0)"),
+      Section<ModelConfig>("load", "load.")
+          .key("initial_mean", GD_MEMBER(load.initial_mean), closed(-1e4, 1e4), "m/s^2",
+               "E[Phi(0)]; the deterministic run S1 keeps Phi at this value")
+          .key("initial_sd", GD_MEMBER(load.initial_sd), closed(0, 1e4), "m/s^2", "sd of Phi(0), normal")
+          .key("drift", GD_MEMBER(load.drift), closed(-kMaxLoadDrift, kMaxLoadDrift), "m/s^3", "lambda, drift of Phi")
+          .key("sigma", GD_MEMBER(load.sigma), closed(0, kMaxLoadSigma), "m/s^2/sqrt(s)", "sigma, noise intensity of Phi"),
+      Section<ModelConfig>("run", "run.")
+          .key("time_step", GD_MEMBER(run.time_step), open_closed(0, 1e-4), "s",
+               "h, fixed RK4 step; small enough for the stiffest contact")
+          .key("duration", GD_MEMBER(run.duration), open_closed(0, 1e4), "s", "T, a whole number of time steps")
+          // Below 2^53: every accepted seed is exact as a double (YAML numbers are read as one).
+          .key("seed", GD_MEMBER(seed), closed(0, 9007199254740991.0), "-", "seed of the counter-based random streams")
+          .key("window", GD_MEMBER(run.window), open(0, kInf), "s",
+               "W, center-distance window [T - W, T]; at most duration")
+          .key("snapshot_times", GD_MEMBER(run.snapshot_times), closed_open(0, kInf), "s",
+               "increasing grid times in [0, duration] at which the state is kept")
+          .may_be_empty()
+          .key("steady_state_tolerance", GD_MEMBER(run.steady_state_tolerance), open_closed(0, 1), "fraction of b",
+               "t_ss threshold")
+          .key("steady_state_tolerance_fine", GD_MEMBER(run.steady_state_tolerance_fine), open_closed(0, 1),
+               "fraction of b", "secondary t_ss threshold, at most steady_state_tolerance"),
   };
   return sections;
 }
-
-#undef GD_REAL
-
-std::string range_text(const Field& f) {
-  std::ostringstream s;
-  if (f.kind == Kind::Integer) s.precision(17);
-  s << (f.open_lo ? "(" : "[") << f.lo << ", " << f.hi << (f.open_hi ? ")" : "]");
-  if (f.kind == Kind::Integer) s << " (integer)";
-  s << " " << f.unit;
-  return s.str();
-}
-
-bool in_range(const Field& f, double v) {
-  return (f.open_lo ? v > f.lo : v >= f.lo) && (f.open_hi ? v < f.hi : v <= f.hi);
-}
-
-void check_value(const Field& f, const std::string& path, double v, std::vector<std::string>& errors) {
-  std::ostringstream e;
-  e.precision(f.kind == Kind::Integer ? 17 : 12);
-  if (!std::isfinite(v)) {
-    e << path << " = " << v << " is not finite; allowed " << range_text(f);
-  } else if (f.kind == Kind::Integer && v != std::floor(v)) {
-    e << path << " = " << v << " is not an integer; allowed " << range_text(f);
-  } else if (!in_range(f, v)) {
-    e << path << " = " << v << " is out of range; allowed " << range_text(f);
-  } else {
-    return;
-  }
-  errors.push_back(e.str());
-}
-
-}  // namespace
 
 void validate_consistency(const ModelConfig& c) {
   std::vector<std::string> errors;
@@ -241,72 +138,20 @@ void validate_consistency(const ModelConfig& c) {
   throw_if_errors(errors);
 }
 
-std::vector<KeySpec> config_schema() {
-  std::vector<KeySpec> keys;
-  for (const Section& s : schema())
-    for (const Field& f : s.fields) keys.push_back({s.name, f.key, f.kind, f.lo, f.hi, f.open_lo, f.open_hi, f.unit});
-  return keys;
-}
-
 ModelConfig parse_config(const YAML::Node& root) {
   ModelConfig c;
   std::vector<std::string> errors;
   if (!root.IsMap()) throw ConfigError("invalid configuration: the top level must be a map with the sections gear_pair, load and run");
-  for (const Section& section : schema()) {
-    const YAML::Node node = root[section.name];
+  for (const Section<ModelConfig>& section : model_sections()) {
+    const YAML::Node node = root[section.name()];
     if (!node) {
-      errors.push_back(std::string("missing section '") + section.name + "'");
-      continue;
-    }
-    if (!node.IsMap()) {
-      errors.push_back(std::string(section.name) + " must be a map of keys, got " + show(node));
-      continue;
-    }
-    for (const auto& kv : node) {
-      const std::string key = kv.first.as<std::string>();
-      bool known = false;
-      for (const Field& f : section.fields) known = known || key == f.key;
-      if (!known) {
-        std::string valid;
-        for (const Field& f : section.fields) valid += std::string(valid.empty() ? "" : ", ") + f.key;
-        errors.push_back(std::string(section.name) + "." + key + " is not a known key (a typo?); valid keys: " + valid);
-      }
-    }
-    for (const Field& f : section.fields) {
-      const std::string path = std::string(section.name) + "." + f.key;
-      const YAML::Node v = node[f.key];
-      if (!v || v.IsNull()) {
-        errors.push_back(path + " is missing; allowed " + range_text(f));
-        continue;
-      }
-      if (f.kind == Kind::RealList) {
-        if (!v.IsSequence()) {
-          errors.push_back(path + " = " + show(v) + " has the wrong type: expected a list of numbers in " + range_text(f));
-          continue;
-        }
-        std::vector<double> list;
-        for (std::size_t i = 0; i < v.size(); ++i) {
-          double x;
-          const std::string item = path + "[" + std::to_string(i) + "]";
-          if (!as_number(v[i], x)) {
-            errors.push_back(item + " = " + show(v[i]) + " has the wrong type: expected a number in " + range_text(f));
-            continue;
-          }
-          const std::size_t before = errors.size();
-          check_value(f, item, x, errors);
-          if (errors.size() == before) list.push_back(x);
-        }
-        f.set_list(c, list);
-        continue;
-      }
-      double x;
-      if (!as_number(v, x)) {
-        errors.push_back(path + " = " + show(v) + " has the wrong type: expected a number in " + range_text(f));
-        continue;
-      }
-      const std::size_t before = errors.size();
-      check_value(f, path, x, errors);
-      if (errors.size() == before) f.set(c, x);
+      errors.push_back("missing section '" + section.name() + "'");
+    } else if (!node.IsMap()) {
+      errors.push_back(section.name() + " must be a map of keys, got " + detail::show(node));
+    } else {
+      SectionReader in(node, section.prefix(), errors);
+      section.read(in, c);
+      in.finish();
     }
   }
   throw_if_errors(errors);
@@ -350,9 +195,7 @@ YAML::Node read_yaml_files(const std::vector<std::string>& files) {
 
 YAML::Node to_yaml(const ModelConfig& config) {
   YAML::Node root;
-  for (const Section& section : schema()) {
-    for (const Field& f : section.fields) root[section.name][f.key] = f.get(config);
-  }
+  for (const Section<ModelConfig>& section : model_sections()) root[section.name()] = section.to_yaml(config);
   return root;
 }
 

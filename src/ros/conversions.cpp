@@ -42,6 +42,13 @@ YAML::Node yaml_from_parameters(const ros::NodeHandle& nh, const std::vector<std
   return root;
 }
 
+YAML::Node yaml_from_namespace(const ros::NodeHandle& nh) {
+  XmlRpc::XmlRpcValue v;
+  if (!nh.getParam(nh.getNamespace(), v) || v.getType() != XmlRpc::XmlRpcValue::TypeStruct)
+    return YAML::Node(YAML::NodeType::Map);
+  return to_yaml(v);
+}
+
 ModelConfig load_model_config(const ros::NodeHandle& nh) {
   return parse_config(yaml_from_parameters(nh, {"gear_pair", "load", "run"}));
 }

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "gear_dynamics/config/config.hpp"
+#include "gear_dynamics/config/parameters.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
 #include "gear_dynamics/engine/simulation.hpp"
 
@@ -30,6 +31,9 @@ Runs the deterministic run S1 and stochastic realizations of the spur-gear model
   --no-deterministic  leave out S1
   --rate HZ           CSV sample rate in simulated Hz (default 1000; 0 = no CSV)
   --output FILE       CSV path (default gear_run.csv; '-' = stdout)
+  --print-parameters SECTION
+                      print the Markdown table of a configuration section (gear_pair, load,
+                      run, monte_carlo, simulator, analysis, aggregator) and exit
 The defaults come from the package's config/ folder: $GEAR_DYNAMICS_CONFIG_DIR if set, else the
 installed share/gear_dynamics/config, else gear_dynamics/config on $ROS_PACKAGE_PATH.
 Snapshot times after run.duration are dropped with a notice (a short --set run.duration run).
@@ -48,6 +52,19 @@ struct Options {
   std::string output = "gear_run.csv";
 };
 
+// The Markdown table of one section, as the docs carry it.
+void print_parameters(const std::string& name) {
+  std::string names;
+  for (const gd::SectionSpec& s : gd::parameter_sections()) {
+    if (s.name == name) {
+      std::cout << gd::parameter_table(s);
+      return;
+    }
+    names += (names.empty() ? "" : ", ") + s.name;
+  }
+  throw std::runtime_error("--print-parameters: no section '" + name + "'; sections: " + names);
+}
+
 Options parse(int argc, char** argv) {
   Options o;
   for (int i = 1; i < argc; ++i) {
@@ -64,6 +81,7 @@ Options parse(int argc, char** argv) {
     else if (a == "--no-deterministic") o.deterministic = false;
     else if (a == "--rate") o.rate = std::stod(value());
     else if (a == "--output") o.output = value();
+    else if (a == "--print-parameters") { print_parameters(value()); std::exit(0); }
     else if (a == "-h" || a == "--help") { std::cout << kUsage; std::exit(0); }
     else throw std::runtime_error("unknown option '" + a + "'\n" + kUsage);
   }

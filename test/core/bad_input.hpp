@@ -1,7 +1,7 @@
-// Bad configuration generated key by key: from a shipped section (the keys and their types) and
-// each key's allowed range (the schema's, or the range the validator states for that key), the
-// cases a validator must refuse with one message naming the key, the value and the range.
-// Shared by the gtests of every validator (model, batch, analysis, simulator).
+// Bad configuration generated key by key from each section's declaration (section.hpp: the key's
+// kind, list length and allowed range) and a value the validator accepts: the cases a validator
+// must refuse with one message naming the key, the value and the range. Shared by the gtests of
+// every validator (model, batch, simulator, analysis, aggregator).
 #pragma once
 
 #include <yaml-cpp/yaml.h>
@@ -16,12 +16,13 @@
 #include <string>
 #include <vector>
 
+#include "gear_dynamics/config/section.hpp"
+
 namespace bad_input {
 
-struct Range {
-  double lo, hi;
-  bool open_lo, open_hi;
-};
+namespace gd = gear_dynamics;
+
+using Range = gd::Range;
 
 // Categories of the fault suite's summary table.
 constexpr const char* kMissing = "missing";
@@ -35,17 +36,20 @@ constexpr const char* kInconsistent = "inconsistent";
 
 struct Case {
   std::string category;
-  std::string section, key;
+  std::string section;          // the declared section's name
+  std::string location;         // the map in the YAML root that holds it ("" = the root itself)
+  std::string prefix;           // how messages name its keys ("monte_carlo.", "~")
+  std::string key;
   int index = -1;               // list element changed, or -1 for the whole value
   std::optional<YAML::Node> value;  // nothing: the key is removed; else its new value
   std::string unknown_key;      // set: this key is added (a typo) instead
   std::string variant;          // tells cases of one key and category apart
-  std::optional<Range> range;   // the key's allowed range, when known: the message must state it
+  std::optional<Range> range;   // the key's allowed range, when it holds numbers: the message must state it
 
   std::string path() const {
-    return section + "." + (unknown_key.empty() ? key : unknown_key) +
-           (index >= 0 ? "[" + std::to_string(index) + "]" : "");
+    return prefix + (unknown_key.empty() ? key : unknown_key) + (index >= 0 ? "[" + std::to_string(index) + "]" : "");
   }
+  std::string whole_path() const { return prefix + key; }
   // A gtest-safe name: category__section_key_variant.
   std::string name() const {
     std::string n = category + "__" + section + "_" + (unknown_key.empty() ? key : unknown_key) +
@@ -55,7 +59,7 @@ struct Case {
     return n;
   }
   void apply(YAML::Node& root) const {
-    YAML::Node s = root[section];
+    YAML::Node s = location.empty() ? root : root[location];
     if (!unknown_key.empty()) {
       s[unknown_key] = *value;
     } else if (!value) {
@@ -85,10 +89,6 @@ inline bool is_number(const YAML::Node& n) {
   }
 }
 
-inline bool is_bool(const YAML::Node& n) {
-  return n.IsScalar() && (n.Scalar() == "true" || n.Scalar() == "false");
-}
-
 // Values just outside the range (at an open bound, one step past a closed one), and -1 and 0
 // where the range says a sign is meaningless: each with its category.
 inline std::vector<std::pair<std::string, double>> outside(const Range& r, bool integer) {
@@ -111,44 +111,59 @@ inline std::vector<std::pair<std::string, double>> outside(const Range& r, bool 
   return out;
 }
 
-// The cases for one key whose shipped value is `shipped`. `range` bounds a number or each number
-// of a list; `integer` asks for whole numbers.
-inline std::vector<Case> key_cases(const std::string& section, const std::string& key, const YAML::Node& shipped,
-                                   const std::optional<Range>& range, bool integer) {
+// The cases for one declared key of `section`, held in the map `location` of the root, whose
+// value `good` the validator accepts (the shipped one, or the default of an optional key).
+inline std::vector<Case> key_cases(const gd::SectionSpec& section, const std::string& location, const gd::KeySpec& k,
+                                   const YAML::Node& good) {
+  using Kind = gd::KeyKind;
+  const bool numbers = k.kind == Kind::Real || k.kind == Kind::Integer || k.kind == Kind::RealList;
+  const std::optional<Range> range = numbers ? std::optional<Range>(k.range) : std::nullopt;
   std::vector<Case> cases;
   const auto add = [&](const char* category, int index, const YAML::Node& v, const std::string& variant) {
-    cases.push_back(Case{category, section, key, index, YAML::Clone(v), "", variant, range});
+    cases.push_back(Case{category, section.name, location, section.prefix, k.name, index, YAML::Clone(v), "", variant, range});
   };
-  cases.push_back(Case{kMissing, section, key, -1, std::nullopt, "", "", range});
-  cases.push_back(Case{kUnknownKey, section, key, -1, YAML::Clone(shipped), key + "_", "", std::nullopt});
-  const bool list = shipped.IsSequence();
-  if (list) {
-    add(kWrongType, -1, YAML::Node("not_a_list"), "scalar");
-    add(kWrongType, -1, YAML::Load("{a: 1}"), "map");
-    if (shipped.size() == 0) return cases;
+  if (k.required) cases.push_back(Case{kMissing, section.name, location, section.prefix, k.name, -1, std::nullopt, "", "", range});
+  cases.push_back(Case{kUnknownKey, section.name, location, section.prefix, k.name, -1, YAML::Clone(good), k.name + "_", "",
+                       std::nullopt});
+  const YAML::Node map = YAML::Load("{a: 1}");
+  if (k.list()) {
+    if (k.kind == Kind::RealList) add(kWrongType, -1, YAML::Node("not_a_list"), "scalar");
+    add(kWrongType, -1, map, "map");
+    if (!k.may_be_empty) add(kWrongType, -1, YAML::Load("[]"), "empty");
+    if (k.size) {
+      YAML::Node longer = YAML::Clone(good);
+      longer.push_back(good[0]);
+      add(kWrongType, -1, longer, "length");
+    }
+    if (good.size() == 0) return cases;
   }
-  const YAML::Node sample = list ? shipped[0] : shipped;
-  const int index = list ? 0 : -1;
-  if (is_number(sample)) {
-    add(kWrongType, index, YAML::Node("not_a_number"), "string");
-    add(kWrongType, index, YAML::Node(true), "bool");
-    if (!list) add(kWrongType, index, YAML::Load("[1, 2]"), "list");
-    add(kNaN, index, YAML::Load(".nan"), "");
-    add(kInf, index, YAML::Load(".inf"), "pos");
-    add(kInf, index, YAML::Load("-.inf"), "neg");
-    if (integer) {
-      const double inside = range && std::isfinite(range->lo) ? range->lo + 1 : sample.as<double>();
-      add(kWrongType, index, YAML::Node(inside + 0.5), "fraction");
-    }
-    if (range) {
-      for (const auto& [category, v] : outside(*range, integer)) add(category.c_str(), index, YAML::Node(v), format(v));
-    }
-  } else if (is_bool(sample)) {
-    add(kWrongType, index, YAML::Node("maybe"), "string");
-    add(kWrongType, index, YAML::Node(2), "number");
-  } else if (sample.IsScalar()) {
-    add(kWrongType, index, YAML::Load("{a: 1}"), "map");
-    add(kWrongType, index, YAML::Load("[a, b]"), "list");
+  const int index = k.list() && good.IsSequence() ? 0 : -1;
+  switch (k.kind) {
+    case Kind::Real:
+    case Kind::Integer:
+    case Kind::RealList:
+      add(kWrongType, index, YAML::Node("not_a_number"), "string");
+      add(kWrongType, index, YAML::Node(true), "bool");
+      if (!k.list()) add(kWrongType, index, YAML::Load("[1, 2]"), "list");
+      add(kNaN, index, YAML::Load(".nan"), "");
+      add(kInf, index, YAML::Load(".inf"), "pos");
+      add(kInf, index, YAML::Load("-.inf"), "neg");
+      if (k.integer()) add(kWrongType, index, YAML::Node((std::isfinite(k.range.lo) ? k.range.lo + 1 : 1) + 0.5), "fraction");
+      for (const auto& [category, v] : outside(k.range, k.integer())) add(category.c_str(), index, YAML::Node(v), format(v));
+      break;
+    case Kind::Flag:
+      add(kWrongType, index, YAML::Node("maybe"), "string");
+      add(kWrongType, index, YAML::Node(2), "number");
+      break;
+    case Kind::Text:
+      add(kWrongType, index, map, "map");
+      add(kWrongType, index, YAML::Load("[a, b]"), "list");
+      if (!k.may_be_empty) add(kWrongType, index, YAML::Node(""), "empty");
+      break;
+    case Kind::TextList:
+      add(kWrongType, -1, YAML::Node(""), "empty_string");
+      if (index >= 0) add(kWrongType, index, map, "element_map");
+      break;
   }
   return cases;
 }
@@ -232,7 +247,7 @@ inline std::string judge(const Case& c, const std::string& error) {
   if (lines.size() != 1) return "expected one error line, got " + std::to_string(lines.size()) + ":\n" + error;
   const std::string& line = lines[0];
   // A list element may be named by its index or by the list.
-  const std::string whole = c.section + "." + c.key;
+  const std::string whole = c.whole_path();
   const std::string path = names(line, c.path()) || c.index < 0 || !names(line, whole) ? c.path() : whole;
   if (!names(line, path)) return "does not name " + c.path() + ": " + line;
   if (c.category == kUnknownKey) {

@@ -1,17 +1,18 @@
-// Bad configuration, generated key by key for every config file: gear_pair.yaml, load.yaml and
-// run.yaml (ranges from the model's schema), monte_carlo.yaml, simulator.yaml and aggregator.yaml
-// (their validators are not schema-driven: each key's range is the one its validator states for a
-// mistyped value). Each case of bad_input.hpp (missing, wrong type, NaN, +-inf, a sign or zero
-// where meaningless, just out of range, a typo) must be refused with one message that names the
-// key, the value and the range. Then the sets that are inconsistent between keys.
+// Bad configuration, generated key by key for every section from its declaration (section.hpp):
+// gear_pair, load, run, monte_carlo, simulator, analysis and gear_aggregator's own keys. Each case
+// of bad_input.hpp (missing, wrong type, NaN, +-inf, a sign or zero where meaningless, just out of
+// range, a typo) must be refused with one message that names the key, the value and the range.
+// Then the sets that are inconsistent between keys.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 
 #include "bad_input.hpp"
-#include "gear_dynamics/montecarlo/batch.hpp"
 #include "gear_dynamics/analysis/batch_analysis.hpp"
+#include "gear_dynamics/config/aggregator_settings.hpp"
+#include "gear_dynamics/config/batch_settings.hpp"
 #include "gear_dynamics/config/config.hpp"
+#include "gear_dynamics/config/parameters.hpp"
 #include "gear_dynamics/config/simulator_settings.hpp"
 
 namespace gd = gear_dynamics;
@@ -27,13 +28,20 @@ YAML::Node load(const std::vector<std::string>& files) {
 
 const std::vector<std::string> kModelFiles = {"gear_pair.yaml", "load.yaml", "run.yaml"};
 
-// A validator, the files it reads (in the layout of the launch files) and the section it owns.
+// A validator, the files it reads (in the layout of the launch files, plus `overlay`), the
+// sections it owns and where they lie in the root ("" = the root itself).
 struct Validator {
-  std::string section;
+  std::string name;
   std::vector<std::string> files;
+  std::string overlay;
+  std::vector<std::pair<std::string, std::string>> sections;  // (declared section, location)
   std::function<void(const YAML::Node&)> parse;
 
-  YAML::Node defaults() const { return load(files); }
+  YAML::Node defaults() const {
+    YAML::Node root = load(files);
+    if (!overlay.empty()) gd::merge_yaml(root, YAML::Load(overlay));
+    return root;
+  }
   std::string error_of(const YAML::Node& root) const { return bi::error_of<gd::ConfigError>(parse, root); }
 };
 
@@ -45,42 +53,34 @@ const std::vector<Validator>& validators() {
       f.push_back(std::move(file));
       return f;
     };
-    v.push_back({"model", kModelFiles, [](const YAML::Node& r) { gd::parse_config(r); }});
-    v.push_back({"monte_carlo", with_model("monte_carlo.yaml"),
+    v.push_back({"model", kModelFiles, "", {{"gear_pair", "gear_pair"}, {"load", "load"}, {"run", "run"}},
+                 [](const YAML::Node& r) { gd::parse_config(r); }});
+    v.push_back({"monte_carlo", with_model("monte_carlo.yaml"), "", {{"monte_carlo", "monte_carlo"}},
                  [](const YAML::Node& r) { gd::parse_batch_settings(r["monte_carlo"], gd::parse_config(r)); }});
-    v.push_back({"simulator", with_model("simulator.yaml"), [](const YAML::Node& r) {
+    v.push_back({"simulator", with_model("simulator.yaml"), "", {{"simulator", "simulator"}}, [](const YAML::Node& r) {
                    gd::parse_simulator_settings(r, gd::parse_config(r).run.time_step);
                  }});
-    v.push_back({"analysis", {"aggregator.yaml"}, [](const YAML::Node& r) { gd::parse_analysis_settings(r); }});
+    v.push_back({"analysis", {"aggregator.yaml"}, "", {{"analysis", "analysis"}},
+                 [](const YAML::Node& r) { gd::parse_analysis_settings(r); }});
+    // The aggregator's private namespace: its own keys at the top, with the section analysis.
+    v.push_back({"aggregator", {"aggregator.yaml"}, "{folders: [/tmp/batch]}", {{"aggregator", ""}},
+                 [](const YAML::Node& r) { gd::parse_aggregator_settings(r); }});
     return v;
   }();
   return all;
 }
 
-const Validator& validator(const std::string& section) {
+const Validator& validator(const std::string& name) {
   for (const Validator& v : validators())
-    if (v.section == section) return v;
-  throw std::logic_error("no validator " + section);
+    if (v.name == name) return v;
+  throw std::logic_error("no validator " + name);
 }
 
-// The range the validator states for `key` when it holds a string where a number belongs (the
-// first element of a list), and whether it asks for an integer.
-std::optional<bi::Range> stated_range(const Validator& v, const std::string& section, const std::string& key,
-                                      bool& integer) {
-  YAML::Node root = v.defaults();
-  const YAML::Node shipped = root[section][key];
-  if (shipped.IsSequence()) {
-    root[section][key][0] = "not_a_number";
-  } else {
-    root[section][key] = "not_a_number";
-  }
-  for (const std::string& line : bi::error_lines(v.error_of(root))) {
-    const auto at = std::min(line.find("allowed"), line.find("expected"));
-    if (!bi::names(line, section + "." + key) || at == std::string::npos) continue;
-    integer = line.find("(integer)", at) != std::string::npos;
-    return bi::stated_range(line.substr(at));
-  }
-  return std::nullopt;
+const gd::SectionSpec& declared(const std::string& name) {
+  static const std::vector<gd::SectionSpec> all = gd::parameter_sections();
+  for (const gd::SectionSpec& s : all)
+    if (s.name == name) return s;
+  throw std::logic_error("no section " + name);
 }
 
 struct Param {
@@ -92,23 +92,14 @@ void PrintTo(const Param& p, std::ostream* os) { bi::PrintTo(p.c, os); }
 
 std::vector<Param> generated_cases() {
   std::vector<Param> all;
-  const auto add = [&](const std::string& validator, const std::vector<bi::Case>& cases) {
-    for (const bi::Case& c : cases) all.push_back({validator, c});
-  };
-  const Validator& model = validator("model");
-  const YAML::Node model_defaults = model.defaults();
-  for (const gd::KeySpec& k : gd::config_schema())
-    add("model", bi::key_cases(k.section, k.key, model_defaults[k.section][k.key],
-                               bi::Range{k.lo, k.hi, k.open_lo, k.open_hi}, k.kind == gd::KeyKind::Integer));
   for (const Validator& v : validators()) {
-    if (v.section == "model") continue;
-    const YAML::Node defaults = v.defaults();
-    for (const auto& kv : defaults[v.section]) {
-      const std::string key = kv.first.as<std::string>();
-      const YAML::Node sample = kv.second.IsSequence() && kv.second.size() ? kv.second[0] : kv.second;
-      bool integer = false;
-      const auto range = bi::is_number(sample) ? stated_range(v, v.section, key, integer) : std::nullopt;
-      add(v.section, bi::key_cases(v.section, key, kv.second, range, integer));
+    const YAML::Node root = v.defaults();
+    for (const auto& [name, location] : v.sections) {
+      const YAML::Node map = location.empty() ? root : root[location];
+      for (const gd::KeySpec& k : declared(name).keys) {
+        const YAML::Node good = map[k.name] ? map[k.name] : k.default_value;
+        for (const bi::Case& c : bi::key_cases(declared(name), location, k, good)) all.push_back({v.name, c});
+      }
     }
   }
   return all;
@@ -116,19 +107,18 @@ std::vector<Param> generated_cases() {
 
 }  // namespace
 
-TEST(FaultsSchema, ShippedModelFilesHoldExactlyTheSchemaKeys) {
-  const YAML::Node defaults = validator("model").defaults();
-  std::vector<std::string> shipped, schema;
-  for (const char* section : {"gear_pair", "load", "run"})
-    for (const auto& kv : defaults[section]) shipped.push_back(std::string(section) + "." + kv.first.as<std::string>());
-  for (const gd::KeySpec& k : gd::config_schema()) schema.push_back(k.section + "." + k.key);
-  std::sort(shipped.begin(), shipped.end());
-  std::sort(schema.begin(), schema.end());
-  EXPECT_EQ(shipped, schema);
+TEST(FaultsSchema, EverySectionHasAValidator) {
+  std::vector<std::string> covered, declared_names;
+  for (const Validator& v : validators())
+    for (const auto& s : v.sections) covered.push_back(s.first);
+  for (const gd::SectionSpec& s : gd::parameter_sections()) declared_names.push_back(s.name);
+  std::sort(covered.begin(), covered.end());
+  std::sort(declared_names.begin(), declared_names.end());
+  EXPECT_EQ(covered, declared_names);
 }
 
 TEST(FaultsSchema, ShippedFilesAreAccepted) {
-  for (const Validator& v : validators()) EXPECT_EQ(v.error_of(v.defaults()), "") << v.section;
+  for (const Validator& v : validators()) EXPECT_EQ(v.error_of(v.defaults()), "") << v.name;
 }
 
 class FaultsConfig : public testing::TestWithParam<Param> {};
@@ -207,8 +197,9 @@ INSTANTIATE_TEST_SUITE_P(
                      {"monte_carlo.shard_index = 2", "[0, 1]"}},
         Inconsistent{"inconsistent__simulator_t_end_off_grid", "simulator", "{simulator: {t_end: 0.1000005}}",
                      {"simulator.t_end = 0.1000005 s is not a whole number of time steps"}},
-        Inconsistent{"inconsistent__simulator_publish_rate_above_grid", "simulator", "{simulator: {publish_rate: 2.0e6}}",
-                     {"simulator.publish_rate = 2000000", "at most 1/time_step"}},
+        Inconsistent{"inconsistent__simulator_publish_rate_above_grid", "simulator",
+                     "{run: {time_step: 1.0e-5}, simulator: {publish_rate: 2.0e5}}",
+                     {"simulator.publish_rate = 200000 is out of range; allowed [1, 100000]", "at most 1/time_step"}},
         Inconsistent{"inconsistent__simulator_loop_forever", "simulator", "{simulator: {loop: true, t_end: 0}}",
                      {"simulator.loop = true needs simulator.t_end > 0"}},
         Inconsistent{"inconsistent__analysis_empty_interval", "analysis", "{analysis: {delta_interval: [5.5e-5, 4.0e-5]}}",

@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """Bad parameters through the nodes: each node is started with its config files' parameters, one
 of them broken (missing, wrong type, NaN, +-inf, a misspelt key), and must exit non-zero, before
-doing any work, with the key in its log. The keys come from the config files themselves.
+doing any work, with the key in its log. The keys come from the config files themselves, and a
+node's own top-level keys (gear_aggregator's ~folders, ~wait_timeout, ...) from NODES.
 
 By default every key is broken once, in one of the ways (rotating), through one node that reads it
 (the model's keys alternate between gear_simulator and gear_monte_carlo); --slow breaks every key
@@ -17,8 +18,14 @@ MODEL = ("gear_pair.yaml", "load.yaml", "run.yaml")
 NODES = {  # executable: (config files, extra parameters)
     "gear_simulator": (MODEL + ("simulator.yaml",), {}),
     "gear_monte_carlo": (MODEL + ("monte_carlo.yaml",), {}),
-    "gear_aggregator": (("aggregator.yaml",), {"folders": "/nonexistent_batch", "exit_when_done": True}),
+    # Its own keys as aggregator.launch sets them (plot_script: no figures).
+    "gear_aggregator": (("aggregator.yaml",), {"folders": "/nonexistent_batch", "report_folder": "",
+                                               "wait_for_batch": False, "batch_node": "/gear_monte_carlo",
+                                               "wait_timeout": 0, "series_mu": 0.04, "plot_script": "",
+                                               "exit_when_done": True}),
 }
+# A node's own keys that are required; the others take their default when left out.
+REQUIRED_OWN = {"folders"}
 NODE_TIMEOUT = 30.0
 
 
@@ -66,6 +73,22 @@ def cases(slow):
             first = next(iter(p[section]))
             p[section][first + "x"] = p[section][first]
             out.append((node, section, first + "x", "unknown_key", "a misspelt key", p))
+        # The node's own keys, "~key" in its log (section "~").
+        own = [k for k in extra if not isinstance(params[k], dict)]
+        for i, key in enumerate(own):
+            found = [b for b in breakages(params[key]) if b[2] is not None or key in REQUIRED_OWN]
+            chosen = found if slow else [found[(len(out) + i) % len(found)]]
+            for category, what, value in chosen:
+                p = copy.deepcopy(params)
+                if value is None:
+                    del p[key]
+                else:
+                    p[key] = value
+                out.append((node, "~", key, category, what, p))
+        if own:
+            p = copy.deepcopy(params)
+            p[own[0] + "x"] = p[own[0]]
+            out.append((node, "~", own[0] + "x", "unknown_key", "a misspelt key", p))
     return out
 
 
@@ -85,8 +108,8 @@ def run(suite):
         with concurrent.futures.ThreadPoolExecutor(4) as pool:
             results = list(pool.map(start, todo))
         for (node, section, key, category, what, _), (code, out) in zip(todo, results):
-            with suite.case("node_" + category, "%s__%s_%s" % (node, section, key)):
-                path = "%s.%s" % (section, key)
+            with suite.case("node_" + category, "%s__%s" % (node, key if section == "~" else section + "_" + key)):
+                path = "~" + key if section == "~" else "%s.%s" % (section, key)
                 assert code not in (0, None) and not fl.died_of_signal(code), \
                     "%s with %s = %s: exit %s (expected an error exit):\n%s" % (node, path, what, code, out[-3000:])
                 assert path in out, "%s with %s = %s: the log does not name %s:\n%s" % (

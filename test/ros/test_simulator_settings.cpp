@@ -60,7 +60,7 @@ TEST(SimulatorSettings, BadValuesNameKeyValueAndRange) {
   // At most one message per grid step.
   EXPECT_HAS(error_with("publish_rate", "60000", 2e-5), "allowed [1, 50000]");
   EXPECT_HAS(error_with("publish_rate", "fast"), "simulator.publish_rate = fast has the wrong type");
-  EXPECT_HAS(error_with("publish_rate", ".nan"), "is out of range");
+  EXPECT_HAS(error_with("publish_rate", ".nan"), "simulator.publish_rate = nan is not finite; allowed [1, 1000000]");
   EXPECT_HAS(error_with("real_time_factor", "-1"), "simulator.real_time_factor = -1 is out of range; allowed [0, 1000]");
   EXPECT_HAS(error_with("realization", "1.5"), "simulator.realization = 1.5 is not an integer");
   EXPECT_HAS(error_with("realization", "-1"), "simulator.realization = -1 is out of range");

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "gear_dynamics/config/section.hpp"
+
 namespace gear_dynamics {
 
 // The default confidence level of every interval reported.
@@ -40,10 +42,15 @@ struct AnalysisSettings {
   std::vector<double> joint_times{0.30, 0.33, 0.36, 0.40};  // Fig. 10 [s], among the snapshot times
 };
 
-// Reads and validates the `analysis` section of `root` (missing keys keep their defaults; unknown
-// keys, wrong types and bad values are errors naming the key, the value and the allowed range).
-// Throws ConfigError.
+// The declaration of the `analysis` section.
+const Section<AnalysisSettings>& analysis_section();
+
+// Reads and validates the `analysis` section of `root` (every key required; unknown keys, wrong
+// types and bad values are errors naming the key, the value and the allowed range). Throws
+// ConfigError.
 AnalysisSettings parse_analysis_settings(const YAML::Node& root);
+// The same, adding its messages to `errors` instead of throwing (for a node that reads more).
+AnalysisSettings read_analysis_settings(const YAML::Node& root, std::vector<std::string>& errors);
 YAML::Node to_yaml(const AnalysisSettings& settings);
 
 }  // namespace gear_dynamics

@@ -27,6 +27,9 @@ struct BatchSettings {
   int threads = 0;                      // 0 = all cores
 };
 
+// The declaration of the `monte_carlo` section.
+const Section<BatchSettings>& batch_section();
+
 // Validates the `monte_carlo` map against `model` (the record rates must divide its grid).
 // Throws ConfigError naming every bad key, its value and the allowed range.
 BatchSettings parse_batch_settings(const YAML::Node& section, const ModelConfig& model);

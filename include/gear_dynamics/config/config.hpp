@@ -1,25 +1,21 @@
-// Configuration: the YAML sections gear_pair, load and run (config/*.yaml), read and validated
-// against one schema. Every problem is reported with the key, the value and the allowed range;
-// unknown keys inside these sections are errors (a typo must not silently fall back).
+// Configuration: the YAML sections gear_pair, load and run (config/*.yaml), each declared once as a
+// table of keys (section.hpp) that drives its reader, its defaults, its YAML form and the docs.
+// Every problem is reported with the key, the value and the allowed range; unknown keys inside
+// these sections are errors (a typo must not silently fall back).
 #pragma once
 
 #include <yaml-cpp/yaml.h>
 
 #include <cstdint>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "gear_dynamics/config/section.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
 #include "gear_dynamics/model/gear_pair.hpp"
 #include "gear_dynamics/engine/simulation.hpp"
 
 namespace gear_dynamics {
-
-class ConfigError : public std::runtime_error {
- public:
-  explicit ConfigError(const std::string& what) : std::runtime_error(what) {}
-};
 
 struct LoadSettings {
   double initial_mean = 20.0;  // E[Phi(0)] [m/s^2]
@@ -46,17 +42,8 @@ constexpr double kMaxLoadDrift = 1.0e6;
 // RK4 is stable for an undamped oscillator while omega h < 2 sqrt(2) (doc/model.md §5).
 constexpr double kMaxOmegaTimesStep = 2.8284271247461903;
 
-// One key of the schema: the kind and range (closed unless open_*) its value must have. The
-// validator is driven by this table; tests generate their bad input from it.
-enum class KeyKind { Real, Integer, RealList };
-struct KeySpec {
-  std::string section, key;
-  KeyKind kind;
-  double lo, hi;
-  bool open_lo, open_hi;
-  std::string unit;
-};
-std::vector<KeySpec> config_schema();
+// The declarations of the sections gear_pair, load and run, in this order.
+const std::vector<Section<ModelConfig>>& model_sections();
 
 // Validates the sections gear_pair, load and run of `root`. Other top-level keys are left alone
 // (a node's namespace holds more than the model). Throws ConfigError listing every problem.
@@ -77,15 +64,5 @@ LaneSpec deterministic_lane(const ModelConfig& config, double mu);
 
 // Checks that hold between parameters, e.g. for values changed at run time: throws ConfigError.
 void validate_consistency(const ModelConfig& config);
-
-// Helpers for validating other YAML sections the same way.
-namespace detail {
-// Parses one scalar as a number; false if it is not one (booleans and strings are not).
-bool as_number(const YAML::Node& n, double& out);
-// A node as one line of YAML, for error messages.
-std::string show(const YAML::Node& n);
-// Throws one ConfigError listing every message, if there are any.
-void throw_if_errors(const std::vector<std::string>& errors);
-}  // namespace detail
 
 }  // namespace gear_dynamics

@@ -6,6 +6,8 @@
 
 #include <cstdint>
 
+#include "gear_dynamics/config/section.hpp"
+
 namespace gear_dynamics {
 
 // Limits shared by the validator and config/Simulator.cfg (test_simulator_settings keeps them equal).
@@ -26,6 +28,9 @@ struct SimulatorSettings {
   bool loop = false;              // start over at t_end instead of stopping
   bool paused = false;            // start paused
 };
+
+// The declaration of the `simulator` section.
+const Section<SimulatorSettings>& simulator_section();
 
 // Validates root["simulator"] for the model's time step h (t_end on the grid, publish_rate at
 // most one message per step). Throws ConfigError listing every problem with key, value and range;

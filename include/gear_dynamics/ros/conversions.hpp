@@ -26,6 +26,8 @@ inline ros::Time sim_stamp(double t) { return ros::Time(kClockOffset + t); }
 // The sections gear_pair, load and run of `nh`'s namespace (normally the private one, filled from
 // config/*.yaml by the launch file) as YAML, then validated by parse_config. Throws ConfigError.
 YAML::Node yaml_from_parameters(const ros::NodeHandle& nh, const std::vector<std::string>& sections);
+// Every parameter of `nh`'s namespace as one YAML map (empty if it holds none).
+YAML::Node yaml_from_namespace(const ros::NodeHandle& nh);
 ModelConfig load_model_config(const ros::NodeHandle& nh);
 
 // The batch folder contract (doc/batch-folder.md §2, §5): topics of a run bag and the manifest format.

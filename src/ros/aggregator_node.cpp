@@ -1,0 +1,87 @@
+#include "gear_dynamics/ros/aggregator_node.hpp"
+
+#include <ros/master.h>
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <filesystem>
+
+#include "gear_dynamics/ros/batch_reader.hpp"
+#include "gear_dynamics/ros/conversions.hpp"
+#include "gear_dynamics/ros/report_message.hpp"
+
+extern char** environ;
+
+namespace gear_dynamics {
+
+AggregatorNode::AggregatorNode(const ros::NodeHandle& private_nh)
+    : private_nh_(private_nh),
+      settings_(parse_aggregator_settings(yaml_from_namespace(private_nh))),
+      report_folder_(settings_.report_dir()) {
+  publisher_ = private_nh_.advertise<BatchReport>("report", 1, /*latch=*/true);
+}
+
+bool AggregatorNode::run() {
+  if (settings_.wait_for_batch && !wait()) return false;
+  try {
+    std::filesystem::create_directories(report_folder_);
+    ReadOptions options;
+    options.series_csv = (std::filesystem::path(report_folder_) / "series.csv").string();
+    options.series_mu = settings_.series_mu;
+    const BatchInputs inputs = read_batches(settings_.folders, options);
+    const BatchAnalysis analysis = analyse(inputs.runs, settings_.analysis);
+    write_report(report_folder_, inputs, analysis);
+    plot();
+    publisher_.publish(make_report_message(inputs, analysis, report_folder_));
+  } catch (const std::exception& ex) {
+    ROS_FATAL("gear_aggregator: %s", ex.what());
+    return false;
+  }
+  ROS_INFO("gear_aggregator: report written to %s/report.md", report_folder_.c_str());
+  return true;
+}
+
+bool AggregatorNode::wait() {
+  const std::string& first = settings_.folders.front();
+  ROS_INFO("gear_aggregator: waiting for the batch in %s", first.c_str());
+  const ros::WallTime start = ros::WallTime::now();
+  bool seen = false;
+  while (ros::ok()) {
+    bool complete = true;
+    for (const std::string& f : settings_.folders) complete = complete && batch_complete(f);
+    if (complete) return true;
+    std::vector<std::string> nodes;
+    const bool running = ros::master::getNodes(nodes) &&
+                         std::find(nodes.begin(), nodes.end(), settings_.batch_node) != nodes.end();
+    if (running) seen = true;
+    if (seen && !running) {
+      ROS_WARN("gear_aggregator: %s ended before its batch was complete; aggregating what it left",
+               settings_.batch_node.c_str());
+      return true;
+    }
+    if (settings_.wait_timeout > 0 && (ros::WallTime::now() - start).toSec() > settings_.wait_timeout) {
+      ROS_FATAL("gear_aggregator: the batch in %s is not complete after ~wait_timeout = %g s", first.c_str(),
+                settings_.wait_timeout);
+      return false;
+    }
+    ros::WallDuration(0.5).sleep();
+  }
+  return false;
+}
+
+void AggregatorNode::plot() const {
+  if (settings_.plot_script.empty()) return;
+  std::vector<std::string> args{"/usr/bin/python3", settings_.plot_script, report_folder_};
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t pid;
+  int status = 0;
+  if (posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ) != 0 || waitpid(pid, &status, 0) < 0 ||
+      !WIFEXITED(status) || WEXITSTATUS(status) != 0)
+    ROS_WARN("gear_aggregator: %s did not draw the figures (exit status %d); the report and CSV files are complete",
+             settings_.plot_script.c_str(), WIFEXITED(status) ? WEXITSTATUS(status) : -1);
+}
+
+}  // namespace gear_dynamics
