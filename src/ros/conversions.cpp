@@ -84,6 +84,23 @@ GearState make_state(const Ensemble& e, int lane, double center_distance) {
   return m;
 }
 
+GearState make_state(const LiveSample& s) {
+  GearState m;
+  m.header.stamp = sim_stamp(s.t);
+  m.t = s.t;
+  m.delta = s.delta;
+  m.delta_dot = s.delta_dot;
+  m.phi = s.phi;
+  m.center_distance = s.center_distance;
+  m.mesh_stiffness = s.mesh_stiffness;
+  m.mesh_phase = s.mesh_phase;
+  m.mu = s.mu;
+  m.sigma = s.sigma;
+  m.realization = static_cast<std::uint32_t>(s.realization);
+  m.seed = s.seed;
+  return m;
+}
+
 RunSummary make_summary(const std::string& run_name, RunKind kind,
                         std::uint32_t realization, double mu, double mesh_phase,
                         const RunSettings& run, const RunResult& r) {
