@@ -18,7 +18,7 @@ SimulatorSettings parse_simulator_settings(const YAML::Node& root, double time_s
   if (!section || !section.IsMap()) {
     throw ConfigError("invalid configuration: missing section 'simulator' (config/simulator.yaml), "
                       "a map with the keys deterministic, realization, publish_rate, publish_scalars, "
-                      "publish_clock, real_time_factor, t_end, loop, paused");
+                      "publish_clock, real_time_factor, t_end, loop, paused, load_input");
   }
   SectionReader in(section, "simulator", errors);
   if (const auto v = in.flag("deterministic")) s.deterministic = *v;
@@ -44,6 +44,12 @@ SimulatorSettings parse_simulator_settings(const YAML::Node& root, double time_s
     if (s.loop && t_end && s.t_end == 0.0) in.error("loop", " = true needs simulator.t_end > 0 (t_end = 0 runs on forever)");
   }
   if (const auto v = in.flag("paused")) s.paused = *v;
+  if (const auto v = in.text("load_input")) {
+    if (*v == "sde" || *v == "external" || *v == "external_plus_noise")
+      s.load_input = *v;
+    else
+      in.error("load_input", " = '" + *v + "' is not one of sde, external, external_plus_noise");
+  }
   in.finish();
   detail::throw_if_errors(errors);
   return s;
@@ -60,6 +66,7 @@ YAML::Node to_yaml(const SimulatorSettings& s) {
   n["t_end"] = s.t_end;
   n["loop"] = s.loop;
   n["paused"] = s.paused;
+  n["load_input"] = s.load_input;
   return n;
 }
 

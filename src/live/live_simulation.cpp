@@ -7,6 +7,8 @@
 #include <numeric>
 #include <utility>
 
+#include "gear_dynamics/engine/simulation.hpp"
+
 namespace gear_dynamics {
 
 namespace {
@@ -60,14 +62,14 @@ const LiveClock& LiveSimulation::default_clock() {
 }
 
 LiveSimulation::LiveSimulation(const ModelConfig& config, const SimulatorSettings& settings, LiveSink& sink,
-                               const LiveClock& clock, LoadInput load_input)
+                               const LiveClock& clock)
     : config_(config),
       settings_(settings),
       sink_(sink),
       clock_(clock),
-      load_input_(load_input),
+      load_input_(load_input_from_string(settings.load_input)),
       end_step_(config.run.steps_for(settings.t_end)),
-      ensemble_(derive(config.gear), config.run.time_step, config.initial, {lane_of(config, settings, load_input)},
+      ensemble_(derive(config.gear), config.run.time_step, config.initial, {lane_of(config, settings, load_input_)},
                 config.seed),
       real_time_factor_(settings.real_time_factor),
       publish_rate_(settings.publish_rate),
@@ -333,12 +335,12 @@ LiveSample LiveSimulation::sample() const {
   const Ensemble& e = ensemble_;
   LiveSample s;
   s.step = e.step_index();
-  s.t = e.time();
+  s.t = grid_time(s.step, e.time_step());
   s.delta = e.delta()[0];
   s.delta_dot = e.velocity()[0];
   s.phi = e.load()[0];
-  s.mesh_stiffness = e.mesh().stiffness(s.t);
-  s.mesh_phase = e.mesh().phase(s.t);
+  s.mesh_stiffness = e.mesh().stiffness(e.time());
+  s.mesh_phase = e.mesh().phase(e.time());
   s.mu = e.lane(0).mu;
   s.sigma = e.lane(0).sigma;
   s.drift = e.lane(0).drift;

@@ -69,8 +69,8 @@ RunInfo make_run_info(const ModelConfig& config, RunKind kind, std::uint32_t rea
 GearState make_state(const Ensemble& e, int lane, double center_distance) {
   GearState m;
   const double t = e.time();
-  m.header.stamp = sim_stamp(t);
-  m.t = t;
+  m.t = grid_time(e.step_index(), e.time_step());
+  m.header.stamp = sim_stamp(m.t);
   m.delta = e.delta()[lane];
   m.delta_dot = e.velocity()[lane];
   m.phi = e.load()[lane];

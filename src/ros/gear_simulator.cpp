@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <cstdio>
+#include <ctime>
+#include <sys/stat.h>
 #include <numeric>
 #include <utility>
 #include <vector>
@@ -18,10 +20,10 @@ namespace {
 // Outgoing queue per subscriber: one second of messages at the default rate, so a subscriber
 // that stalls briefly while the node runs as fast as possible loses nothing.
 constexpr uint32_t kQueue = 1000;
-// While running, /clock goes out at every publish instant but at most every 0.5 ms of wall time
-// (as Gazebo throttles its clock): every sim-time node, this one included, wakes up for each
-// /clock message. Real time at 1 kHz keeps every one.
-constexpr auto kClockInterval = std::chrono::microseconds(500);
+// While running, /clock goes out at a publish instant at most every 5 ms of wall time (200 Hz, as
+// Gazebo throttles its clock): every sim-time node, this one included, wakes up for each /clock
+// message, and nothing needs it finer than the state stamps, which carry the exact time.
+constexpr auto kClockInterval = std::chrono::milliseconds(5);
 
 SimulatorSettings load_settings(const ros::NodeHandle& nh, double time_step) {
   return parse_simulator_settings(yaml_from_parameters(nh, {"simulator"}), time_step);
@@ -31,13 +33,6 @@ std::string seconds(double t) {
   char text[32];
   std::snprintf(text, sizeof text, "%.9g s", t);
   return text;
-}
-
-void publish_scalar(const ros::Publisher& pub, double value) {
-  if (pub.getNumSubscribers() == 0) return;
-  std_msgs::Float64 m;
-  m.data = value;
-  pub.publish(m);
 }
 
 // Simulator.cfg's double parameters (all of them) as (name, field), from the generated description.
@@ -52,13 +47,14 @@ std::vector<std::pair<std::string, double SimulatorConfig::*>> double_parameters
 }  // namespace
 
 void ClampLoggedConfig::__clamp__() {
-  const SimulatorConfig requested = *this;
-  SimulatorConfig::__clamp__();
+  // One rule for a bad value, at start and at run time: refused. At start the node ends with a
+  // FATAL (ConfigError); here the value in effect stays (NaN marks it for reconfigure()).
   for (const auto& [name, field] : double_parameters()) {
-    const double asked = requested.*field, used = this->*field;
-    if (asked != used && !std::isnan(asked))
-      ROS_WARN("dynamic_reconfigure: %s = %g is out of range [%g, %g]; clamped to %g", name.c_str(), asked,
-               __getMin__().*field, __getMax__().*field, used);
+    const double asked = this->*field, lo = __getMin__().*field, hi = __getMax__().*field;
+    if (std::isnan(asked) || (asked >= lo && asked <= hi)) continue;
+    ROS_WARN("dynamic_reconfigure: %s = %g is out of range [%g, %g]: refused, keeping the value in effect",
+             name.c_str(), asked, lo, hi);
+    this->*field = std::nan("");
   }
 }
 
@@ -78,6 +74,18 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
   }
   if (settings_.publish_clock) clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 10);
   run_info_pub_ = nh_.advertise<RunInfo>("run_info", 1, /*latch=*/true);
+  state_topic_ = state_pub_.getTopic();
+  delta_topic_ = delta_pub_ ? delta_pub_.getTopic() : "";
+  delta_dot_topic_ = delta_dot_pub_ ? delta_dot_pub_.getTopic() : "";
+  phi_topic_ = phi_pub_ ? phi_pub_.getTopic() : "";
+  center_distance_topic_ = center_distance_pub_ ? center_distance_pub_.getTopic() : "";
+  // The last state of a finite run, for late subscribers (latched, published at t_end).
+  final_state_pub_ = nh_.advertise<GearState>("final_state", 1, /*latch=*/true);
+  if (settings_.load_input != "sde")
+    load_sub_ = nh_.subscribe("load_command", 100, &GearSimulator::load_command, this,
+                              ros::TransportHints().tcpNoDelay());
+  private_nh_.param<std::string>("record_prefix", record_prefix_, "");
+  record_open();  // throws ConfigError when the bag cannot be opened
 
   // Publishes t = 0 and the run info at once.
   sim_.emplace(config_, settings_, static_cast<LiveSink&>(*this));
@@ -116,11 +124,65 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
            seconds(config_.run.time_step).c_str(), end.c_str(), static_cast<long long>(period),
            1.0 / (static_cast<double>(period) * config_.run.time_step), settings_.real_time_factor,
            settings_.paused ? ", paused" : "");
+  if (settings_.load_input != "sde")
+    ROS_INFO("gear_simulator: load input '%s' from %s (std_msgs/Float64, m/s^2), applied at the next step",
+             settings_.load_input.c_str(), load_sub_.getTopic().c_str());
   sim_->start();
 }
 
 GearSimulator::~GearSimulator() {
   if (sim_) sim_->stop();
+  record_close();
+}
+
+// ---- recording ----
+
+void GearSimulator::record_open() {
+  if (record_prefix_.empty()) return;
+  std::lock_guard<std::mutex> lock(record_mutex_);
+  if (recorder_) return;
+  char date[32];
+  const std::time_t now = std::time(nullptr);
+  std::strftime(date, sizeof date, "%Y-%m-%d-%H-%M-%S", std::localtime(&now));
+  std::string path = record_prefix_ + "_" + date + ".bag";
+  struct stat st {};
+  for (int k = 2; ::stat(path.c_str(), &st) == 0 || ::stat((path + ".active").c_str(), &st) == 0; ++k)
+    path = record_prefix_ + "_" + date + "_" + std::to_string(k) + ".bag";
+  try {
+    recorder_ = std::make_unique<LiveRecorder>(path);
+  } catch (const std::exception& e) {
+    throw ConfigError("record: cannot write " + path + ".active: " + e.what());
+  }
+  ROS_INFO("record: writing every published message into %s", path.c_str());
+}
+
+void GearSimulator::record_close() {
+  std::unique_ptr<LiveRecorder> r;
+  {
+    std::lock_guard<std::mutex> lock(record_mutex_);
+    r = std::move(recorder_);
+  }
+  if (!r) return;
+  r->close();
+  std::lock_guard<std::mutex> lock(record_mutex_);
+  bags_.push_back(r->path());
+  recorded_ += r->written();
+  lost_ += r->lost();
+  if (record_error_.empty()) record_error_ = r->error();
+}
+
+template <class M>
+void GearSimulator::record(const std::string& topic, const ros::Time& stamp, const M& msg) {
+  if (record_prefix_.empty()) return;
+  std::lock_guard<std::mutex> lock(record_mutex_);
+  if (recorder_) recorder_->write(topic, stamp, msg);
+}
+
+void GearSimulator::load_command(const std_msgs::Float64ConstPtr& m) {
+  const LiveSimulation::Status s = sim_->status();
+  const ros::Time now = ros::Time::now();
+  sim_->command_load(m->data, now.toSec());
+  record(load_sub_.getTopic(), sim_stamp(s.time), *m);  // received after the state at s.time
 }
 
 // ---- callbacks ----
@@ -128,7 +190,7 @@ GearSimulator::~GearSimulator() {
 void GearSimulator::reconfigure(SimulatorConfig& config, uint32_t /*level*/) {
   for (const auto& [name, field] : double_parameters()) {
     if (!std::isnan(config.*field)) continue;
-    ROS_WARN("dynamic_reconfigure: %s = nan is not a number; keeping %g", name.c_str(), dynamic_.*field);
+    ROS_WARN("dynamic_reconfigure: %s = nan or out of range: refused, keeping %g", name.c_str(), dynamic_.*field);
     config.*field = dynamic_.*field;
   }
   if (settings_.deterministic && (config.sigma != 0.0 || config.lambda != 0.0)) {
@@ -200,24 +262,59 @@ void GearSimulator::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) 
   stat.add("mu", s.mu);
   stat.add("sigma [m/s^2/sqrt(s)]", s.sigma);
   stat.add("lambda [m/s^3]", s.drift);
+  stat.add("load input", settings_.load_input);
+  stat.add("load commands applied", s.load_commands);
+  if (!record_prefix_.empty()) {
+    std::lock_guard<std::mutex> lock(record_mutex_);
+    const std::uint64_t written = recorded_ + (recorder_ ? recorder_->written() : 0);
+    const std::uint64_t lost = lost_ + (recorder_ ? recorder_->lost() : 0);
+    const std::string error = !record_error_.empty() ? record_error_ : recorder_ ? recorder_->error() : "";
+    stat.add("record: bag", recorder_ ? recorder_->path() : (bags_.empty() ? "" : bags_.back()) + " (closed)");
+    stat.add("record: messages written", written);
+    stat.add("record: messages lost", lost);
+    stat.add("record: wall s waited for the disk", recorder_ ? recorder_->waited_seconds() : 0.0);
+    if (lost > 0)
+      stat.mergeSummaryf(DiagnosticStatus::ERROR, "record: %llu messages not written (%s)",
+                         static_cast<unsigned long long>(lost), error.c_str());
+  }
 }
 
 // ---- LiveSink (stepping thread) ----
 
 bool GearSimulator::wants_center_distance() const {
-  return state_pub_.getNumSubscribers() > 0 ||
+  return !record_prefix_.empty() || state_pub_.getNumSubscribers() > 0 ||
          (settings_.publish_scalars && center_distance_pub_.getNumSubscribers() > 0);
 }
 
 void GearSimulator::publish(const LiveSample& s) {
   publish_clock(s.step, s.t, false);
-  if (state_pub_.getNumSubscribers() > 0) state_pub_.publish(make_state(s));
-  if (settings_.publish_scalars) {
-    publish_scalar(delta_pub_, s.delta);
-    publish_scalar(delta_dot_pub_, s.delta_dot);
-    publish_scalar(phi_pub_, s.phi);
-    publish_scalar(center_distance_pub_, s.center_distance);
+  const bool recording = !record_prefix_.empty();
+  if (recording || state_pub_.getNumSubscribers() > 0) {
+    const GearState m = make_state(s);
+    state_pub_.publish(m);
+    record(state_topic_, m.header.stamp, m);
   }
+  if (settings_.publish_scalars) {
+    const ros::Time stamp = sim_stamp(s.t);
+    const auto scalar = [&](const ros::Publisher& pub, const std::string& topic, double value) {
+      if (!recording && pub.getNumSubscribers() == 0) return;
+      std_msgs::Float64 m;
+      m.data = value;
+      pub.publish(m);
+      record(topic, stamp, m);
+    };
+    scalar(delta_pub_, delta_topic_, s.delta);
+    scalar(delta_dot_pub_, delta_dot_topic_, s.delta_dot);
+    scalar(phi_pub_, phi_topic_, s.phi);
+    scalar(center_distance_pub_, center_distance_topic_, s.center_distance);
+  }
+}
+
+void GearSimulator::finished(const LiveSample& last) {
+  const GearState m = make_state(last);
+  final_state_pub_.publish(m);
+  record(final_state_pub_.getTopic(), m.header.stamp, m);
+  record_close();  // the bag of this run is complete; a ~reset opens the next one
 }
 
 void GearSimulator::idle(const LiveSample& last) {
@@ -245,6 +342,8 @@ void GearSimulator::run_info(const LiveRunInfo& i) {
   out << all;
   info.parameters_yaml = out.c_str();
   run_info_pub_.publish(info);
+  record_open();  // after t_end and a ~reset: the next bag
+  record(run_info_pub_.getTopic(), info.header.stamp, info);
 }
 
 void GearSimulator::log(LiveLogLevel level, const std::string& line) {

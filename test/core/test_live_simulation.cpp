@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -336,7 +337,7 @@ std::vector<gd::LiveSample> reference(const Loaded& l, std::int64_t every) {
   rec.record = [&](const gd::Ensemble& en, const Eigen::ArrayXd& d) {
     gd::LiveSample s;
     s.step = en.step_index();
-    s.t = en.time();
+    s.t = gd::grid_time(en.step_index(), en.time_step());
     s.delta = en.delta()[0];
     s.delta_dot = en.velocity()[0];
     s.phi = en.load()[0];
@@ -395,9 +396,10 @@ TEST(LiveSimulation, RequestWaitsForTheLoopThread) {
 }
 
 TEST(LiveSimulation, ExternalLoadHoldsTheCommandFromTheNextStep) {
-  const Loaded l = load("simulator: {real_time_factor: 0.0, t_end: 0.01}");
+  const Loaded l = load("simulator: {real_time_factor: 0.0, t_end: 0.01, load_input: external}");
   RecordingSink sink;
-  gd::LiveSimulation sim(l.model, l.sim, sink, gd::LiveSimulation::default_clock(), gd::LoadInput::External);
+  gd::LiveSimulation sim(l.model, l.sim, sink);
+  EXPECT_EQ(sim.load_input(), gd::LoadInput::External);
   EXPECT_EQ(sim.ensemble().lane(0).sigma, 0.0);
   EXPECT_EQ(sink.samples[0].phi, l.model.load.initial_mean);  // before any command: Phi(0), held
   sim.iterate();
@@ -425,10 +427,10 @@ TEST(LiveSimulation, ExternalLoadHoldsTheCommandFromTheNextStep) {
 }
 
 TEST(LiveSimulation, ExternalPlusNoiseShiftsTheSdeByTheCommand) {
-  const Loaded l = load("simulator: {real_time_factor: 0.0, t_end: 0.01}\nload: {sigma: 5.0}");
+  const Loaded l = load("simulator: {real_time_factor: 0.0, t_end: 0.01, load_input: external_plus_noise}\n"
+                        "load: {sigma: 5.0}");
   RecordingSink sink;
-  gd::LiveSimulation sim(l.model, l.sim, sink, gd::LiveSimulation::default_clock(),
-                         gd::LoadInput::ExternalPlusNoise);
+  gd::LiveSimulation sim(l.model, l.sim, sink);
   sim.command_load(30.0, 0.0);
   sim.iterate();  // first command: Phi = 30 at step 0, then the SDE's increments
   gd::Ensemble ref(gd::derive(l.model.gear), kH, l.model.initial,
@@ -454,6 +456,25 @@ TEST(LiveSimulation, SdeIgnoresLoadCommands) {
   without.iterate();
   EXPECT_EQ(a.samples.back().phi, b.samples.back().phi);
   EXPECT_EQ(with.status().load_commands, 0);
+}
+
+TEST(LiveSimulation, TimeIsTheGridTimeRoundedToNanoseconds) {
+  EXPECT_EQ(gd::grid_time_ns(83123000, 1e-6), 83123000000);
+  EXPECT_EQ(gd::grid_time(83123000, 1e-6), 83.123);  // n * h would be 83.12299999999999
+  EXPECT_NE(83123000 * 1e-6, 83.123);
+  const Loaded l = load("simulator: {real_time_factor: 0.0, t_end: 0.01, publish_rate: 10000.0}");
+  RecordingSink sink;
+  gd::LiveSimulation sim(l.model, l.sim, sink);
+  run_until_stopped(sim);
+  for (const auto& s : sink.samples) {
+    char text[40];
+    std::snprintf(text, sizeof text, "%.17g", s.t);
+    double shortest = 0.0;
+    char again[40];
+    std::snprintf(again, sizeof again, "%.4f", s.t);  // every publish instant is a multiple of 0.1 ms
+    std::sscanf(again, "%lf", &shortest);
+    EXPECT_EQ(s.t, shortest) << text;
+  }
 }
 
 TEST(LoadInput, Names) {

@@ -5,6 +5,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cstdint>
+#include <string>
 
 namespace gear_dynamics {
 
@@ -25,6 +26,9 @@ struct SimulatorSettings {
   double t_end = 0.4;             // [s]; 0 = run on forever
   bool loop = false;              // start over at t_end instead of stopping
   bool paused = false;            // start paused
+  // Where Phi comes from: "sde" (load.yaml's SDE), "external" (the load_command topic, held), or
+  // "external_plus_noise" (the command plus the SDE's increments); see gear_dynamics/live/.
+  std::string load_input = "sde";
 };
 
 // Validates root["simulator"] for the model's time step h (t_end on the grid, publish_rate at

@@ -27,6 +27,7 @@
 namespace gear_dynamics {
 
 // Where the external load comes from (simulator.load_input).
+// (simulator.load_input; commands through LiveSimulation::command_load).
 enum class LoadInput {
   Sde,                // the load SDE of load.yaml (Eq. 19); load commands are ignored
   External,           // Phi = the last command, held constant (sigma and lambda not applied)
@@ -38,7 +39,7 @@ std::string to_string(LoadInput mode);
 // The state of the lane at one publish instant (SI; the fields of GearState).
 struct LiveSample {
   std::int64_t step = 0;  // grid index n; t = n h
-  double t = 0.0;         // Ensemble::time() = n * h [s]
+  double t = 0.0;         // grid_time(n, h): n h rounded to whole ns (engine/simulation.hpp) [s]
   double delta = 0.0, delta_dot = 0.0, phi = 0.0;
   double center_distance = 0.0;  // d(t) over the trailing window (0 if the sink did not want it)
   double mesh_stiffness = 0.0, mesh_phase = 0.0;
@@ -124,10 +125,11 @@ class LiveSimulation {
   // While not running, the loop wakes this often (LiveSink::idle).
   static constexpr std::chrono::milliseconds kIdlePeriod{100};
 
-  // Validated configuration (parse_config, parse_simulator_settings). Publishes t = 0 and the run
+  // Validated configuration (parse_config, parse_simulator_settings; settings.load_input names the
+  // LoadInput). Publishes t = 0 and the run
   // info through `sink` at once (on the constructing thread). `sink` and `clock` must outlive it.
   LiveSimulation(const ModelConfig& config, const SimulatorSettings& settings, LiveSink& sink,
-                 const LiveClock& clock = default_clock(), LoadInput load_input = LoadInput::Sde);
+                 const LiveClock& clock = default_clock());
   ~LiveSimulation();  // stop()
 
   LiveSimulation(const LiveSimulation&) = delete;

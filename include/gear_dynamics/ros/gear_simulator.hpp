@@ -7,18 +7,23 @@
 #include <dynamic_reconfigure/server.h>
 #include <ros/ros.h>
 #include <std_srvs/Empty.h>
+#include <std_msgs/Float64.h>
 #include <std_srvs/Trigger.h>
 
 #include <boost/thread/recursive_mutex.hpp>
 #include <chrono>
 #include <diagnostic_updater/diagnostic_updater.h>
+#include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "gear_dynamics/SimulatorConfig.h"
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/config/simulator_settings.hpp"
 #include "gear_dynamics/live/live_simulation.hpp"
+#include "gear_dynamics/ros/live_recorder.hpp"
 
 namespace gear_dynamics {
 
@@ -52,10 +57,19 @@ class GearSimulator : private LiveSink {
   void run_info(const LiveRunInfo& info) override;
   void log(LiveLogLevel level, const std::string& line) override;
   void idle(const LiveSample& last) override;
+  void finished(const LiveSample& last) override;
   bool wants_center_distance() const override;
   void publish_clock(std::int64_t step, double t, bool always);  // else throttled to kClockInterval
 
+  // The bag of record:=true (~record_prefix not empty): opened at the start and after a reset that
+  // follows t_end, closed at t_end and at shutdown. Under record_mutex_.
+  void record_open();
+  void record_close();
+  template <class M>
+  void record(const std::string& topic, const ros::Time& stamp, const M& msg);
+
   // ---- callbacks (spinner thread) ----
+  void load_command(const std_msgs::Float64ConstPtr& m);
   void reconfigure(SimulatorConfig& config, uint32_t level);
   bool pause(std_srvs::Empty::Request&, std_srvs::Empty::Response&);
   bool unpause(std_srvs::Empty::Request&, std_srvs::Empty::Response&);
@@ -68,8 +82,18 @@ class GearSimulator : private LiveSink {
   ModelConfig config_;
   SimulatorSettings settings_;
 
+  std::string record_prefix_;  // empty: no recording
+  std::string state_topic_, delta_topic_, delta_dot_topic_, phi_topic_, center_distance_topic_;  // absolute
+
   // Stepping thread only.
   std::chrono::steady_clock::time_point last_clock_;
+
+  // The recording (stepping thread; diagnostics read it).
+  std::mutex record_mutex_;
+  std::unique_ptr<LiveRecorder> recorder_;
+  std::vector<std::string> bags_;           // closed, in order
+  std::uint64_t recorded_ = 0, lost_ = 0;   // over the closed bags
+  std::string record_error_;
 
   // Spinner thread only.
   SimulatorConfig dynamic_;  // the last configuration handed over
@@ -77,7 +101,8 @@ class GearSimulator : private LiveSink {
 
   // ROS interfaces (the sink runs on the stepping thread; roscpp publishers are thread-safe).
   ros::Publisher state_pub_, delta_pub_, delta_dot_pub_, phi_pub_, center_distance_pub_, clock_pub_,
-      run_info_pub_;
+      run_info_pub_, final_state_pub_;
+  ros::Subscriber load_sub_;
   ros::ServiceServer pause_srv_, unpause_srv_, reset_srv_, step_srv_;
   boost::recursive_mutex reconfigure_mutex_;
   dynamic_reconfigure::Server<ClampLoggedConfig> reconfigure_server_;
