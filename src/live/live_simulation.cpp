@@ -413,6 +413,7 @@ std::optional<LiveClock::time_point> LiveSimulation::pace() {
     anchored_ = true;
     return std::nullopt;
   }
+  if (target - now < kMinWait) return std::nullopt;  // close enough: step on, sleep later
   return target;
 }
 

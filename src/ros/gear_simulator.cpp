@@ -65,20 +65,15 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
       settings_(load_settings(private_nh, config_.run.time_step)),
       reconfigure_server_(reconfigure_mutex_, private_nh),
       updater_(nh, private_nh) {
-  state_pub_ = nh_.advertise<GearState>("state", kQueue);
+  state_ = CountedPublisher::advertise<GearState>(nh_, "state", kQueue);
   if (settings_.publish_scalars) {
-    delta_pub_ = nh_.advertise<std_msgs::Float64>("delta", kQueue);
-    delta_dot_pub_ = nh_.advertise<std_msgs::Float64>("delta_dot", kQueue);
-    phi_pub_ = nh_.advertise<std_msgs::Float64>("phi", kQueue);
-    center_distance_pub_ = nh_.advertise<std_msgs::Float64>("center_distance", kQueue);
+    delta_ = CountedPublisher::advertise<std_msgs::Float64>(nh_, "delta", kQueue);
+    delta_dot_ = CountedPublisher::advertise<std_msgs::Float64>(nh_, "delta_dot", kQueue);
+    phi_ = CountedPublisher::advertise<std_msgs::Float64>(nh_, "phi", kQueue);
+    center_distance_ = CountedPublisher::advertise<std_msgs::Float64>(nh_, "center_distance", kQueue);
   }
   if (settings_.publish_clock) clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 10);
   run_info_pub_ = nh_.advertise<RunInfo>("run_info", 1, /*latch=*/true);
-  state_topic_ = state_pub_.getTopic();
-  delta_topic_ = delta_pub_ ? delta_pub_.getTopic() : "";
-  delta_dot_topic_ = delta_dot_pub_ ? delta_dot_pub_.getTopic() : "";
-  phi_topic_ = phi_pub_ ? phi_pub_.getTopic() : "";
-  center_distance_topic_ = center_distance_pub_ ? center_distance_pub_.getTopic() : "";
   // The last state of a finite run, for late subscribers (latched, published at t_end).
   final_state_pub_ = nh_.advertise<GearState>("final_state", 1, /*latch=*/true);
   if (settings_.load_input != "sde")
@@ -282,31 +277,30 @@ void GearSimulator::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) 
 // ---- LiveSink (stepping thread) ----
 
 bool GearSimulator::wants_center_distance() const {
-  return !record_prefix_.empty() || state_pub_.getNumSubscribers() > 0 ||
-         (settings_.publish_scalars && center_distance_pub_.getNumSubscribers() > 0);
+  return !record_prefix_.empty() || state_.wanted() || (settings_.publish_scalars && center_distance_.wanted());
 }
 
 void GearSimulator::publish(const LiveSample& s) {
   publish_clock(s.step, s.t, false);
   const bool recording = !record_prefix_.empty();
-  if (recording || state_pub_.getNumSubscribers() > 0) {
+  if (recording || state_.wanted()) {
     const GearState m = make_state(s);
-    state_pub_.publish(m);
-    record(state_topic_, m.header.stamp, m);
+    state_.pub.publish(m);
+    record(state_.topic, m.header.stamp, m);
   }
   if (settings_.publish_scalars) {
     const ros::Time stamp = sim_stamp(s.t);
-    const auto scalar = [&](const ros::Publisher& pub, const std::string& topic, double value) {
-      if (!recording && pub.getNumSubscribers() == 0) return;
+    const auto scalar = [&](const CountedPublisher& p, double value) {
+      if (!recording && !p.wanted()) return;
       std_msgs::Float64 m;
       m.data = value;
-      pub.publish(m);
-      record(topic, stamp, m);
+      p.pub.publish(m);
+      record(p.topic, stamp, m);
     };
-    scalar(delta_pub_, delta_topic_, s.delta);
-    scalar(delta_dot_pub_, delta_dot_topic_, s.delta_dot);
-    scalar(phi_pub_, phi_topic_, s.phi);
-    scalar(center_distance_pub_, center_distance_topic_, s.center_distance);
+    scalar(delta_, s.delta);
+    scalar(delta_dot_, s.delta_dot);
+    scalar(phi_, s.phi);
+    scalar(center_distance_, s.center_distance);
   }
 }
 

@@ -278,26 +278,28 @@ TEST(LiveSimulation, PacesByTheInjectedClock) {
   ASSERT_TRUE(n.until);
   EXPECT_EQ(*n.until - t0, microseconds(2000));
 
-  // Factor 4: a quarter of the wall time per simulated ms, from a new anchor.
+  // Factor 4: a quarter of the wall time per simulated ms, from a new anchor. The loop sleeps only
+  // when the target is kMinWait (1 ms) ahead or more: three periods go by without a wait.
   Request r;
   r.real_time_factor = 4.0;
   sim.post(r);
   n = sim.iterate();
   EXPECT_FALSE(n.until);  // re-anchored at the change
   const auto t1 = clock.t;
+  for (int i = 1; i <= 3; ++i) EXPECT_FALSE(sim.iterate().until) << i;  // 250, 500, 750 us ahead
   n = sim.iterate();
   ASSERT_TRUE(n.until);
-  EXPECT_EQ(*n.until - t1, microseconds(250));
-  n = sim.iterate();
-  EXPECT_EQ(*n.until - t1, microseconds(500));
+  EXPECT_EQ(*n.until - t1, microseconds(1000));
 
   // A lag over kMaxLag: no burst to catch up, pacing restarts from the present.
   clock.t += std::chrono::milliseconds(150);
   n = sim.iterate();
   EXPECT_FALSE(n.until);
   const auto t2 = clock.t;
+  for (int i = 1; i <= 3; ++i) EXPECT_FALSE(sim.iterate().until) << i;
   n = sim.iterate();
-  EXPECT_EQ(*n.until - t2, microseconds(250));
+  ASSERT_TRUE(n.until);
+  EXPECT_EQ(*n.until - t2, microseconds(1000));
 
   // Factor 0: as fast as possible, never a wait.
   r = Request{};
@@ -318,6 +320,23 @@ TEST(LiveSimulation, PacesByTheInjectedClock) {
   }
   EXPECT_EQ(clock.t - start, std::chrono::seconds(1));
   EXPECT_EQ(sim.ensemble().step_index() - from, 1000 * 1000);
+
+  // 10 kHz at factor 1: one sleep per 10 publish periods (1 ms), 1000 per wall second, not 10000.
+  r = Request{};
+  r.publish_rate = 10000.0;
+  sim.post(r);
+  int waits = 0;
+  const auto start10 = clock.t;
+  const std::int64_t from10 = sim.ensemble().step_index();
+  while (clock.t - start10 < std::chrono::seconds(1)) {
+    n = sim.iterate();
+    if (n.until) {
+      ++waits;
+      clock.t = *n.until;
+    }
+  }
+  EXPECT_NEAR(waits, 1000, 10);
+  EXPECT_NEAR(static_cast<double>(sim.ensemble().step_index() - from10), 1e6, 2000.0);
 }
 
 namespace {

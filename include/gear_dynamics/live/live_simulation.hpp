@@ -122,6 +122,10 @@ class LiveSimulation {
 
   // Pacing does not burst to catch up a lag longer than this; it restarts from the present.
   static constexpr std::chrono::milliseconds kMaxLag{100};
+  // Pacing sleeps only when the target is at least this far ahead: at high publish rates the loop
+  // steps several publish periods per wake-up (bursts), instead of one futex sleep per period.
+  // The simulation then leads its wall-time target by less than this.
+  static constexpr std::chrono::milliseconds kMinWait{1};
   // While not running, the loop wakes this often (LiveSink::idle).
   static constexpr std::chrono::milliseconds kIdlePeriod{100};
 
