@@ -170,7 +170,10 @@ template <class M>
 void GearSimulator::record(const std::string& topic, const ros::Time& stamp, const M& msg) {
   if (record_prefix_.empty()) return;
   std::lock_guard<std::mutex> lock(record_mutex_);
-  if (recorder_) recorder_->write(topic, stamp, msg);
+  if (recorder_)
+    recorder_->write(topic, stamp, msg);
+  else
+    ++lost_;  // the bag of this run could not be opened (logged)
 }
 
 void GearSimulator::load_command(const std_msgs::Float64ConstPtr& m) {
@@ -336,7 +339,13 @@ void GearSimulator::run_info(const LiveRunInfo& i) {
   out << all;
   info.parameters_yaml = out.c_str();
   run_info_pub_.publish(info);
-  record_open();  // after t_end and a ~reset: the next bag
+  try {
+    record_open();  // after t_end and a ~reset: the next bag
+  } catch (const std::exception& e) {
+    ROS_ERROR("%s: this run is not recorded (diagnostics count it)", e.what());
+    std::lock_guard<std::mutex> lock(record_mutex_);
+    if (record_error_.empty()) record_error_ = e.what();
+  }
   record(run_info_pub_.getTopic(), info.header.stamp, info);
 }
 
