@@ -403,7 +403,9 @@ void LiveSimulation::diverge(const std::string& what) {
 std::optional<LiveClock::time_point> LiveSimulation::pace() {
   if (real_time_factor_ <= 0.0) return std::nullopt;
   const auto now = clock_.now();
-  const auto target = anchor_wall_ + std::chrono::duration_cast<LiveClock::time_point::duration>(
+  // Rounded to the clock's tick, not truncated: 1000 steps of 1 us at factor 1 are 1 ms exactly,
+  // whichever way the double product rounds.
+  const auto target = anchor_wall_ + std::chrono::round<LiveClock::time_point::duration>(
                                          std::chrono::duration<double>(
                                              static_cast<double>(ensemble_.step_index() - anchor_step_) *
                                              config_.run.time_step / real_time_factor_));

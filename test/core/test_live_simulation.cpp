@@ -316,6 +316,7 @@ TEST(LiveSimulation, PacesByTheInjectedClock) {
   const std::int64_t from = sim.ensemble().step_index();
   for (int i = 0; i < 1000; ++i) {
     n = sim.iterate();
+    ASSERT_TRUE(n.until) << i;
     clock.t = *n.until;
   }
   EXPECT_EQ(clock.t - start, std::chrono::seconds(1));
