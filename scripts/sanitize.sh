@@ -101,11 +101,12 @@ instrumented_tbb() {
 thread() {
   (
     tbb=$(instrumented_tbb)
-    build thread -tsan test_core test_batch_io gear_monte_carlo gear_aggregator gear_simulator \
+    build thread -tsan test_core test_live_simulation test_batch_io gear_monte_carlo gear_aggregator gear_simulator \
       gear_dynamics_generate_messages_py
     export LD_LIBRARY_PATH=$tbb${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}
     "$GD_WS/devel/lib/gear_dynamics/test_core" --gtest_filter='Batch*'
     "$GD_WS/devel/lib/gear_dynamics/test_batch_io"
+    "$GD_WS/devel/lib/gear_dynamics/test_live_simulation"
     small_batch
     "$repo/test/faults/reconfigure.py"
     echo "sanitize: TSan clean"
@@ -116,7 +117,8 @@ thread() {
 # each from scratch on 2 cores (the instrumented libtbb included).
 core_address() {
   (
-    build address,undefined -asan test_core gear_run
+    build address,undefined -asan test_core test_live_simulation gear_run
+    "$GD_WS/devel/lib/gear_dynamics/test_live_simulation"
     # Less the two sampling tests (1 minute here under ASan), which step the code the others step.
     "$GD_WS/devel/lib/gear_dynamics/test_core" \
       --gtest_filter='-Analytic.LoadProcessMoments:Batch.LoadStatisticsAtTheSnapshotTimes'
@@ -129,10 +131,12 @@ core_address() {
 core_thread() {
   (
     tbb=$(instrumented_tbb)
-    build thread -tsan test_core
+    build thread -tsan test_core test_live_simulation
     LD_LIBRARY_PATH=$tbb${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH} \
       "$GD_WS/devel/lib/gear_dynamics/test_core" --gtest_filter='Batch*'
-    echo "sanitize: TSan clean (the core's batch runner)"
+    # The live simulation's hand-off between a caller and its loop thread.
+    "$GD_WS/devel/lib/gear_dynamics/test_live_simulation"
+    echo "sanitize: TSan clean (the core's batch runner and the live loop)"
   )
 }
 

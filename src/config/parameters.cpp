@@ -44,6 +44,11 @@ std::string allowed(const KeySpec& k) {
     case KeyKind::Flag:
       return "true, false";
     case KeyKind::Text:
+      if (!k.choices.empty()) {
+        std::string list;
+        for (const std::string& c : k.choices) list += (list.empty() ? "" : ", ") + c;
+        return list;
+      }
       return k.may_be_empty ? "any string" : "non-empty";
     case KeyKind::RealList:
       return std::string(k.size ? "" : k.may_be_empty ? "any length, " : "non-empty, ") + "each " + (range == "finite" ? range : "in " + range);

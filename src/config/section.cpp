@@ -1,5 +1,6 @@
 #include "gear_dynamics/config/section.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -66,6 +67,11 @@ std::string KeySpec::expected() const {
     case KeyKind::Flag:
       return "true or false";
     case KeyKind::Text:
+      if (!choices.empty()) {
+        std::string list;
+        for (const std::string& c : choices) list += (list.empty() ? "" : ", ") + c;
+        return "one of " + list;
+      }
       return may_be_empty ? "a string" : "a non-empty string";
     case KeyKind::RealList:
       return (size ? "a list of " + std::to_string(size) + " numbers in "
@@ -149,6 +155,8 @@ std::optional<Value> SectionReader::read(const KeySpec& key) {
     case KeyKind::Text:
       if (!v.IsScalar()) return wrong(" has the wrong type: expected ");
       if (v.Scalar().empty() && !key.may_be_empty) return wrong(" is not allowed: expected ");
+      if (!key.choices.empty() && std::find(key.choices.begin(), key.choices.end(), v.Scalar()) == key.choices.end())
+        return wrong(" is not allowed: expected ");
       out.text = v.Scalar();
       break;
     case KeyKind::RealList: {

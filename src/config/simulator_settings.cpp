@@ -26,7 +26,11 @@ const Section<SimulatorSettings>& simulator_section() {
           .key("t_end", GD_MEMBER(t_end), closed(0, 1e6), "s",
                "where the run stops, a whole number of time steps; 0 = run on forever")
           .key("loop", GD_MEMBER(loop), "at t_end start over (as ~reset) instead of stopping; needs t_end > 0")
-          .key("paused", GD_MEMBER(paused), "start paused (then ~unpause or ~step)");
+          .key("paused", GD_MEMBER(paused), "start paused (then ~unpause or ~step)")
+          .key("load_input", GD_MEMBER(load_input),
+               "where Phi comes from: sde (load.yaml's SDE), external (the load_command topic, held), "
+               "external_plus_noise (the command plus the SDE's increments)")
+          .one_of({"sde", "external", "external_plus_noise"});
   return section;
 }
 
@@ -35,7 +39,7 @@ SimulatorSettings parse_simulator_settings(const YAML::Node& root, double time_s
   if (!section || !section.IsMap()) {
     throw ConfigError("invalid configuration: missing section 'simulator' (config/simulator.yaml), "
                       "a map with the keys deterministic, realization, publish_rate, publish_scalars, "
-                      "publish_clock, real_time_factor, t_end, loop, paused");
+                      "publish_clock, real_time_factor, t_end, loop, paused, load_input");
   }
   std::vector<std::string> errors;
   SectionReader in(section, "simulator.", errors);

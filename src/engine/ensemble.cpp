@@ -68,6 +68,11 @@ void Ensemble::set_sigma(int lane, double sigma) {
 
 void Ensemble::set_drift(int lane, double drift) { spec_.at(lane).drift = drift_[lane] = drift; }
 
+void Ensemble::set_load(int lane, double load) {
+  (void)spec_.at(lane);  // bounds check
+  load_[lane] = load;
+}
+
 void Ensemble::refill_normals(std::uint64_t first_index) {
   normals_first_ = first_index;
   double row[kNormalChunk];

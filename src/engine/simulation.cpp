@@ -13,6 +13,14 @@ std::int64_t RunSettings::steps_for(double t) const {
   return static_cast<std::int64_t>(std::llround(t / time_step));
 }
 
+std::int64_t grid_time_ns(std::int64_t n, double time_step) {
+  return static_cast<std::int64_t>(std::llround(static_cast<double>(n) * time_step * 1e9));
+}
+
+double grid_time(std::int64_t n, double time_step) {
+  return static_cast<double>(grid_time_ns(n, time_step)) / 1e9;  // correctly rounded: nearest the decimal
+}
+
 std::vector<RunResult> simulate(Ensemble& ensemble, const RunSettings& settings,
                                 const Recorder& recorder) {
   const int lanes = ensemble.lanes();

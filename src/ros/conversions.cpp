@@ -76,8 +76,8 @@ RunInfo make_run_info(const ModelConfig& config, RunKind kind, std::uint32_t rea
 GearState make_state(const Ensemble& e, int lane, double center_distance) {
   GearState m;
   const double t = e.time();
-  m.header.stamp = sim_stamp(t);
-  m.t = t;
+  m.t = grid_time(e.step_index(), e.time_step());
+  m.header.stamp = sim_stamp(m.t);
   m.delta = e.delta()[lane];
   m.delta_dot = e.velocity()[lane];
   m.phi = e.load()[lane];
@@ -88,6 +88,23 @@ GearState make_state(const Ensemble& e, int lane, double center_distance) {
   m.sigma = e.lane(lane).sigma;
   m.realization = static_cast<std::uint32_t>(e.lane(lane).realization);
   m.seed = e.seed();
+  return m;
+}
+
+GearState make_state(const LiveSample& s) {
+  GearState m;
+  m.header.stamp = sim_stamp(s.t);
+  m.t = s.t;
+  m.delta = s.delta;
+  m.delta_dot = s.delta_dot;
+  m.phi = s.phi;
+  m.center_distance = s.center_distance;
+  m.mesh_stiffness = s.mesh_stiffness;
+  m.mesh_phase = s.mesh_phase;
+  m.mu = s.mu;
+  m.sigma = s.sigma;
+  m.realization = static_cast<std::uint32_t>(s.realization);
+  m.seed = s.seed;
   return m;
 }
 

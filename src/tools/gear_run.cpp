@@ -14,6 +14,7 @@
 
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/config/parameters.hpp"
+#include "gear_dynamics/config/simulator_settings.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
 #include "gear_dynamics/engine/simulation.hpp"
 
@@ -34,6 +35,11 @@ Runs the deterministic run S1 and stochastic realizations of the spur-gear model
   --print-parameters SECTION
                       print the Markdown table of a configuration section (gear_pair, load,
                       run, monte_carlo, simulator, analysis, aggregator) and exit
+  --check-simulator   only validate the configuration as gear_simulator would (config/simulator.yaml
+                      included): print 'valid' and exit 0, or the problems on stderr and exit 1
+                      (simulate.launch runs this while it is parsed, so a bad value ends roslaunch
+                      with a non-zero exit code before any node starts)
+  --record-dir DIR    with --check-simulator: DIR must be an existing writable folder (record:=true)
 The defaults come from the package's config/ folder: $GEAR_DYNAMICS_CONFIG_DIR if set, else the
 installed share/gear_dynamics/config, else gear_dynamics/config on $ROS_PACKAGE_PATH.
 Snapshot times after run.duration are dropped with a notice (a short --set run.duration run).
@@ -50,6 +56,8 @@ struct Options {
   bool deterministic = true;
   double rate = 1000.0;
   std::string output = "gear_run.csv";
+  bool check_simulator = false;
+  std::string record_dir;
 };
 
 // The Markdown table of one section, as the docs carry it.
@@ -82,6 +90,8 @@ Options parse(int argc, char** argv) {
     else if (a == "--rate") o.rate = std::stod(value());
     else if (a == "--output") o.output = value();
     else if (a == "--print-parameters") { print_parameters(value()); std::exit(0); }
+    else if (a == "--check-simulator") o.check_simulator = true;
+    else if (a == "--record-dir") o.record_dir = value();
     else if (a == "-h" || a == "--help") { std::cout << kUsage; std::exit(0); }
     else throw std::runtime_error("unknown option '" + a + "'\n" + kUsage);
   }
@@ -151,11 +161,29 @@ int main(int argc, char** argv) try {
   const Options opt = parse(argc, argv);
   const std::string dir = config_dir();
   std::vector<std::string> files = {dir + "/gear_pair.yaml", dir + "/load.yaml", dir + "/run.yaml"};
+  if (opt.check_simulator) files.push_back(dir + "/simulator.yaml");
   files.insert(files.end(), opt.files.begin(), opt.files.end());
   YAML::Node root = gd::read_yaml_files(files);
   for (const auto& s : opt.sets) apply_set(root, s);
   if (opt.mu >= 0) root["gear_pair"]["friction_coefficient"] = opt.mu;
   if (opt.seed >= 0) root["run"]["seed"] = opt.seed;
+  if (opt.check_simulator) {
+    std::vector<std::string> problems;
+    try {
+      const gd::ModelConfig model = gd::parse_config(root);
+      gd::parse_simulator_settings(root, model.run.time_step);
+    } catch (const gd::ConfigError& e) {
+      std::fprintf(stderr, "gear_simulator would refuse to start: %s\n", e.what());
+      return 1;
+    }
+    if (!opt.record_dir.empty() && ::access(opt.record_dir.c_str(), W_OK | X_OK) != 0) {
+      std::fprintf(stderr, "gear_simulator would refuse to start: record_dir '%s' is not a writable folder\n",
+                   opt.record_dir.c_str());
+      return 1;
+    }
+    std::printf("valid\n");
+    return 0;
+  }
   drop_late_snapshots(root);
   const gd::ModelConfig cfg = gd::parse_config(root);
 
@@ -191,7 +219,7 @@ int main(int argc, char** argv) try {
     recorder.every = std::max<std::int64_t>(1, std::llround(1.0 / (opt.rate * cfg.run.time_step)));
     recorder.record = [&](const gd::Ensemble& e, const Eigen::ArrayXd& d) {
       for (int i = 0; i < e.lanes(); ++i)
-        *csv << names[i] << ',' << e.time() << ',' << e.delta()[i] << ',' << e.velocity()[i] << ','
+        *csv << names[i] << ',' << gd::grid_time(e.step_index(), e.time_step()) << ',' << e.delta()[i] << ',' << e.velocity()[i] << ','
              << e.load()[i] << ',' << d[i] << '\n';
     };
   }

@@ -159,6 +159,7 @@ inline std::vector<Case> key_cases(const gd::SectionSpec& section, const std::st
       add(kWrongType, index, map, "map");
       add(kWrongType, index, YAML::Load("[a, b]"), "list");
       if (!k.may_be_empty) add(kWrongType, index, YAML::Node(""), "empty");
+      if (!k.choices.empty()) add(kOutOfRange, index, YAML::Node("not_a_choice"), "choice");
       break;
     case Kind::TextList:
       add(kWrongType, -1, YAML::Node(""), "empty_string");

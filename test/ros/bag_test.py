@@ -1,6 +1,7 @@
 #!/usr/bin/python3
-"""roslaunch gear_dynamics simulate.launch record:=true, stopped with SIGINT: the bag holds the
-messages the node published (state, run_info), and rosbag play publishes them again unchanged."""
+"""roslaunch gear_dynamics simulate.launch record:=true: the node's own bag, closed at t_end, holds
+the messages it published (state, run_info, final_state, the scalars) under their absolute names,
+and rosbag play publishes them again unchanged."""
 import glob
 import io
 import os
@@ -11,10 +12,8 @@ import sys
 import tempfile
 import time
 import unittest
-import xmlrpc.client
 
 import rosbag
-import rosgraph
 import rospy
 import rostest
 from gear_dynamics.msg import GearState, RunInfo
@@ -22,21 +21,16 @@ from gear_dynamics.msg import GearState, RunInfo
 from simtest import Collector, ends_at, last_run, services, wait_until
 
 T_END = 0.05
-TOPICS = ('state', 'run_info')  # relative, as simulate.launch records them (namespace-proof)
+TOPICS = ('/gear/state', '/gear/run_info')  # absolute, as the node writes them
 
 
-def wire(msg):
-    """A message as it goes over the wire and into a bag."""
+def without_seq(msg):
+    """A message as it goes into the bag, header.seq cleared: roscpp numbers each message on the
+    wire per publisher, the in-process bag keeps the message as the node built it (seq 0)."""
+    msg.header.seq = 0
     buff = io.BytesIO()
     msg.serialize(buff)
     return buff.getvalue()
-
-
-def outbound_connections(node, topic):
-    """How many subscribers `node` is connected to on `topic` (from its own bus info)."""
-    uri = rosgraph.Master('/bag_test').lookupNode(node)
-    _, _, info = xmlrpc.client.ServerProxy(uri).getBusInfo('/bag_test')
-    return sum(1 for c in info if c[2] == 'o' and c[4] == topic)
 
 
 class BagRoundTrip(unittest.TestCase):
@@ -48,36 +42,40 @@ class BagRoundTrip(unittest.TestCase):
              'paused:=true', 't_end:=%r' % T_END, 'real_time_factor:=0', 'output:=log'],
             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
         try:
-            state = Collector('/state', GearState)
-            info = Collector('/run_info', RunInfo)
+            state = Collector('/gear/state', GearState)
+            info = Collector('/gear/run_info', RunInfo)
+            final = Collector('/gear/final_state', GearState)
             state.wait_connected(30.0)
-            # rosbag and this test both listen before the run starts.
-            wait_until(lambda: outbound_connections('/gear_simulator', '/state') == 2
-                       and outbound_connections('/gear_simulator', '/run_info') == 2, 30.0, 'rosbag record')
-            srv = services('/gear_simulator')
+            srv = services('/gear/gear_simulator')
             srv['reset']()
             srv['unpause']()
             live = last_run(state.wait_for(ends_at(T_END), 30.0, 't_end'))
             live_info = info.wait_for(len, 10.0, 'run_info')[-1]
-            time.sleep(0.5)  # rosbag writes what is on its way
+            live_final = final.wait_for(len, 10.0, 'final_state')[-1]
+            # The node closes the run's bag at t_end.
+            wait_until(lambda: glob.glob(os.path.join(folder, 'gear_*.bag')), 30.0, 'the closed bag')
         finally:
             os.killpg(launch.pid, signal.SIGINT)  # Ctrl-C
             launch.wait(timeout=30)
 
-        bags = glob.glob(os.path.join(folder, 'gear_simulator_*.bag'))
+        bags = glob.glob(os.path.join(folder, 'gear_*.bag'))
         self.assertEqual(len(bags), 1, os.listdir(folder))  # closed cleanly: no .active left
         with rosbag.Bag(bags[0]) as bag:
-            recorded = {t: [raw[1] for _, raw, _ in bag.read_messages(topics=[t], raw=True)] for t in TOPICS}
-        # Byte for byte (header.seq included): the run after the reset, and the latest run_info.
-        states = [GearState().deserialize(b) for b in recorded['state']]
+            recorded = {t: [raw[1] for _, raw, _ in bag.read_messages(topics=[t], raw=True)]
+                        for t in TOPICS + ('/gear/final_state', '/gear/delta')}
+        # Byte for byte but header.seq: the run after the reset, the latest run_info, final_state.
+        states = [GearState().deserialize(b) for b in recorded['/gear/state']]
         start = len(states) - len(last_run(states))
-        self.assertEqual(recorded['state'][start:], [wire(m) for m in live])
-        self.assertEqual(recorded['run_info'][-1], wire(live_info))
+        self.assertEqual(recorded['/gear/state'][start:], [without_seq(m) for m in live])
+        self.assertEqual(recorded['/gear/run_info'][-1], without_seq(live_info))
+        self.assertEqual(recorded['/gear/final_state'], [without_seq(live_final)])
+        self.assertEqual(live_final.t, live[-1].t)
+        self.assertEqual(len(recorded['/gear/delta']), len(states))  # the scalar topics too
 
         # Play it back to other names; the node is gone, nothing else publishes there.
-        played = {t: Collector('/played/' + t, rospy.AnyMsg) for t in TOPICS}
+        played = {t: Collector('/played' + t, rospy.AnyMsg) for t in TOPICS}
         subprocess.run(['rosbag', 'play', '--wait-for-subscribers', '--topics'] + list(TOPICS) +
-                       ['--bags=' + bags[0]] + ['%s:=/played/%s' % (t, t) for t in TOPICS],
+                       ['--bags=' + bags[0]] + ['%s:=/played%s' % (t, t) for t in TOPICS],
                        check=True, timeout=60, stdout=subprocess.DEVNULL)
         for t in TOPICS:
             n = len(recorded[t])

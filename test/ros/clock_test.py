@@ -20,14 +20,14 @@ class ClockTest(unittest.TestCase):
         clock.wait_for(lambda m: len(m) > 0, 20.0, 'a first /clock')
         time.sleep(1.0)
         stamps = [m.clock.to_sec() for m in clock.messages()]
-        # 1 wall second at real_time_factor 1 and one clock per 1 ms publish period: ~1000.
-        self.assertGreater(len(stamps), 100)
+        # 1 wall second at real_time_factor 1, /clock throttled to 200 Hz of wall time: ~200.
+        self.assertGreater(len(stamps), 50)
         self.assertGreaterEqual(min(stamps), CLOCK_OFFSET)
         backwards = [(a, b) for a, b in zip(stamps, stamps[1:]) if not b > a]
         self.assertEqual(backwards, [], 'clock did not increase')
 
     def test_state_stamps_one_publish_period_apart(self):
-        state = Collector('state', GearState)
+        state = Collector('/gear/state', GearState)
         state.wait_for(lambda m: len(m) > 200, 20.0, '200 states')
         msgs = state.messages()
         # 1 kHz in simulated time: consecutive states are 1 ms (1000 integration steps) apart.

@@ -51,7 +51,7 @@ class MatchesCli(unittest.TestCase):
                              'at t = %r' % m.t)
 
     def test_stochastic_realization(self):
-        msgs, info = run_node('')
+        msgs, info = run_node('/gear')
         self.assertEqual((info.kind, info.seed, info.realization, info.duration), ('stochastic', 12345, 3, T_END))
         # The YAML's mu (0.03), not the .cfg default (0.04): the first reconfigure callback kept it.
         self.assertEqual({(m.mu, m.realization, m.seed) for m in msgs}, {(0.03, 3, 12345)})
@@ -61,7 +61,7 @@ class MatchesCli(unittest.TestCase):
         self.assertGreater(len({m.phi for m in msgs}), 1)  # the load moves
 
     def test_deterministic_load(self):
-        msgs, info = run_node('/s1')
+        msgs, info = run_node('/s1/gear')
         self.assertEqual((info.kind, info.sigma), ('S1', 0.0))
         self.assertEqual(len(msgs), 101)  # 2 kHz
         rows = gear_run(info, 2000.0, ['--realizations', '0'])

@@ -7,6 +7,7 @@
 
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
+#include "gear_dynamics/engine/simulation.hpp"
 
 namespace gd = gear_dynamics;
 
@@ -28,7 +29,7 @@ int main(int argc, char** argv) try {
   for (;;) {
     const std::int64_t n = e.step_index();
     if (n % every == 0 || n == end)
-      std::fprintf(out, "%.17g,%.17g,%.17g,%.17g,%.17g\n", e.time(), e.delta()[0], e.velocity()[0],
+      std::fprintf(out, "%.17g,%.17g,%.17g,%.17g,%.17g\n", gd::grid_time(n, e.time_step()), e.delta()[0], e.velocity()[0],
                    e.load()[0], e.lane(0).mu);
     if (n == end) break;
     if (n == at) e.set_mu(0, mu);  // as the node: after publishing step n, before integrating it

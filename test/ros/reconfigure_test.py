@@ -35,15 +35,15 @@ def reference(info, switch_step, mu):
 
 class Reconfigure(unittest.TestCase):
     def test_mu_change_during_run(self):
-        client = dynamic_reconfigure.client.Client('/gear_simulator', timeout=20)
+        client = dynamic_reconfigure.client.Client('/gear/gear_simulator', timeout=20)
         loaded = client.get_configuration(timeout=20)
         # The YAML values, not the .cfg defaults (mu 0.04).
         self.assertEqual((loaded['mu'], loaded['sigma'], loaded['real_time_factor']), (MU0, 5.0, 0.1))
 
-        state = Collector('/state', GearState)
-        info = Collector('/run_info', RunInfo)
+        state = Collector('/gear/state', GearState)
+        info = Collector('/gear/run_info', RunInfo)
         state.wait_connected()
-        srv = services('/gear_simulator')
+        srv = services('/gear/gear_simulator')
         srv['reset']()
         first_info = info.wait_for(len, 10.0, 'run_info')[-1]
         srv['unpause']()

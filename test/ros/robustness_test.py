@@ -83,17 +83,17 @@ class Robustness(unittest.TestCase):
         rospy.loginfo('gear_simulator stopped %.3f s after SIGINT', elapsed)
 
     def test_3_divergence_pauses_and_publishes_no_nan(self):
-        state = Collector('/diverge/state', GearState)
-        scalars = [Collector('/diverge/' + t, Float64) for t in ('delta', 'delta_dot', 'phi', 'center_distance')]
+        state = Collector('/diverge/gear/state', GearState)
+        scalars = [Collector('/diverge/gear/' + t, Float64) for t in ('delta', 'delta_dot', 'phi', 'center_distance')]
         diagnostics = Collector('/diagnostics', DiagnosticArray)
         for c in [state] + scalars:
             c.wait_connected()
-        srv = services('/diverge/gear_simulator')
+        srv = services('/diverge/gear/gear_simulator')
         srv['reset']()
         srv['unpause']()  # diverges at t = 0.12 ms, before the first publish instant (1 ms)
 
         def status(level, text):
-            return lambda arrays: any(s.level == level and text in s.message and 'diverge/gear_simulator' in s.name
+            return lambda arrays: any(s.level == level and text in s.message and 'diverge/gear/gear_simulator' in s.name
                                       for a in arrays for s in a.status)
         diagnostics.wait_for(status(DiagnosticStatus.ERROR, 'diverged'), 10.0, 'an ERROR status')
         time.sleep(0.3)

@@ -19,8 +19,9 @@ PERIOD = 1000  # steps per publish period (1 kHz)
 
 
 def t_of(k):
-    """Simulated time of publish instant k, computed as the node does (step index times h)."""
-    return float(k * PERIOD) * H
+    """Simulated time of publish instant k as the node writes it: step index times h rounded to
+    whole nanoseconds (grid_time), i.e. the double nearest the decimal k * PERIOD * H."""
+    return round(float(k * PERIOD) * H, 9)
 
 
 class Services(unittest.TestCase):
@@ -28,11 +29,11 @@ class Services(unittest.TestCase):
 
     @classmethod
     def setUpClass(cls):
-        cls.state = Collector('/state', GearState)
+        cls.state = Collector('/gear/state', GearState)
         cls.clock = Collector('/clock', Clock)
         cls.state.wait_connected()
         cls.clock.wait_connected()
-        cls.srv = services('/gear_simulator')
+        cls.srv = services('/gear/gear_simulator')
 
     def test_1_paused_clock_stands_still(self):
         self.srv['reset']()  # t = 0, published now that the test listens
@@ -83,7 +84,7 @@ class Services(unittest.TestCase):
         self.assertIn('t_end', answer.message)
 
     def test_5_pause_while_running_and_pacing(self):
-        client = dynamic_reconfigure.client.Client('/gear_simulator', timeout=20)
+        client = dynamic_reconfigure.client.Client('/gear/gear_simulator', timeout=20)
         client.update_configuration({'real_time_factor': 0.05})  # 20 ms simulated take 0.4 s
         self.state.clear()
         start = time.time()
@@ -108,7 +109,7 @@ class Services(unittest.TestCase):
         self.state.wait_for(ends_at(T_END), 30.0, 't_end after unpause')
 
     def test_6_loop_repeats(self):
-        loop = Collector('/loop/state', GearState)
+        loop = Collector('/loop/gear/state', GearState)
         msgs = loop.wait_for(lambda m: sum(x.t == 0.0 for x in m) >= 3, 30.0, 'three loop starts')
         starts = [i for i, m in enumerate(msgs) if m.t == 0.0]
         first, second = msgs[starts[0]:starts[1]], msgs[starts[1]:starts[2]]

@@ -41,7 +41,8 @@ TEST(SimulatorSettings, ShippedFileLoads) {
   EXPECT_EQ(s.publish_rate, 1000.0);
   EXPECT_TRUE(s.publish_clock);
   EXPECT_EQ(s.real_time_factor, 1.0);
-  EXPECT_EQ(s.t_end, 0.4);
+  EXPECT_EQ(s.t_end, 0.0);  // runs until stopped (the paper: t_end 0.4)
+  EXPECT_EQ(s.load_input, "sde");
   EXPECT_FALSE(s.loop);
   EXPECT_FALSE(s.paused);
   // to_yaml round-trips.

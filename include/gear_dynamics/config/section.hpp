@@ -54,6 +54,7 @@ struct KeySpec {
   std::string doc;            // one line
   std::size_t size = 0;       // a list of exactly this many, or 0: any number
   bool may_be_empty = false;  // a list may be [], a text ""
+  std::vector<std::string> choices;  // a text: one of these, if any are given
   bool required = true;       // false: a missing key keeps its default
   YAML::Node default_value;   // from the default-constructed settings struct
 
@@ -213,6 +214,7 @@ class Section {
   // Modifiers of the key declared last.
   Section& optional() { return keys_.back().spec.required = false, *this; }
   Section& may_be_empty() { return keys_.back().spec.may_be_empty = true, *this; }
+  Section& one_of(std::vector<std::string> choices) { return keys_.back().spec.choices = std::move(choices), *this; }
 
   // Reads every key of the table from `in` into `out` (bad keys leave their member alone).
   void read(SectionReader& in, S& out) const {

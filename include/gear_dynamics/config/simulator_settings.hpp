@@ -5,6 +5,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cstdint>
+#include <string>
 
 #include "gear_dynamics/config/section.hpp"
 
@@ -24,9 +25,12 @@ struct SimulatorSettings {
   bool publish_scalars = true;    // the std_msgs/Float64 topics too
   bool publish_clock = true;      // own /clock
   double real_time_factor = 1.0;  // simulated s per wall s; 0 = as fast as possible
-  double t_end = 0.4;             // [s]; 0 = run on forever
+  double t_end = 0.0;             // [s]; 0 = run until stopped
   bool loop = false;              // start over at t_end instead of stopping
   bool paused = false;            // start paused
+  // Where Phi comes from: "sde" (load.yaml's SDE), "external" (the load_command topic, held), or
+  // "external_plus_noise" (the command plus the SDE's increments); see gear_dynamics/live/.
+  std::string load_input = "sde";
 };
 
 // The declaration of the `simulator` section.

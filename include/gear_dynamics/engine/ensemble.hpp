@@ -75,6 +75,8 @@ class Ensemble {
   void set_mu(int lane, double mu);
   void set_sigma(int lane, double sigma);
   void set_drift(int lane, double drift);
+  // Sets the lane's load state Phi [m/s^2] now; the load SDE goes on from it (an external load).
+  void set_load(int lane, double load);
 
  private:
   void refill_normals(std::uint64_t first_index);

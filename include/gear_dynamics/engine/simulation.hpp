@@ -45,6 +45,12 @@ struct Recorder {
   std::function<void(const Ensemble&, const Eigen::ArrayXd& center_distance)> record;
 };
 
+// The time of grid point n, n h, rounded to whole nanoseconds, and as a double the one nearest to
+// that decimal: what messages, bags and CSV files carry as t (printed shortest it reads 83.123, not
+// n * h = 83.12299999999999). The integration itself uses n * h.
+std::int64_t grid_time_ns(std::int64_t n, double time_step);
+double grid_time(std::int64_t n, double time_step);
+
 // Runs `ensemble` from its current state (normally t = 0) to settings.duration.
 std::vector<RunResult> simulate(Ensemble& ensemble, const RunSettings& settings,
                                 const Recorder& recorder = {});

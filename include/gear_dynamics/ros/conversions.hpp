@@ -15,6 +15,7 @@
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
 #include "gear_dynamics/engine/simulation.hpp"
+#include "gear_dynamics/live/live_simulation.hpp"
 
 namespace gear_dynamics {
 
@@ -40,6 +41,8 @@ RunInfo make_run_info(const ModelConfig& config, RunKind kind, std::uint32_t rea
                       double mu, double sigma, double duration);
 // State of `lane` now; center_distance is the instantaneous d(t) (SI).
 GearState make_state(const Ensemble& ensemble, int lane, double center_distance);
+// The live simulation's sample as a message (the same numbers as make_state of its ensemble).
+GearState make_state(const LiveSample& sample);
 RunSummary make_summary(const std::string& run_name, RunKind kind,
                         std::uint32_t realization, double mu, double mesh_phase,
                         const RunSettings& run, const RunResult& result);

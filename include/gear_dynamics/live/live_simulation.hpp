@@ -1,0 +1,231 @@
+// The live simulation without ROS (doc/live-node-notes.md): one realization of the gear model
+// (doc/model.md) stepped in simulated time, paced by wall time against a real-time factor, with
+// run-time requests (mu, sigma, lambda, real_time_factor, publish_rate, pause, reset, step) handed
+// over from other threads and applied between two steps at the next publish instant, an optional
+// external load command applied at the next step, t_end (stop or loop) and divergence.
+//
+// It reports through a LiveSink (the state at every publish instant, run-info changes, log lines),
+// so the ROS node gear_simulator is a thin adapter (publishers, services, dynamic_reconfigure,
+// diagnostics), and it is unit-tested without a master (test/core/test_live_simulation.cpp) with an
+// injected clock: iterate() does one step of the loop and says until when the loop would wait.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include "gear_dynamics/config/config.hpp"
+#include "gear_dynamics/config/simulator_settings.hpp"
+#include "gear_dynamics/engine/ensemble.hpp"
+#include "gear_dynamics/engine/observers.hpp"
+
+namespace gear_dynamics {
+
+// Where the external load comes from (simulator.load_input).
+// (simulator.load_input; commands through LiveSimulation::command_load).
+enum class LoadInput {
+  Sde,                // the load SDE of load.yaml (Eq. 19); load commands are ignored
+  External,           // Phi = the last command, held constant (sigma and lambda not applied)
+  ExternalPlusNoise,  // Phi = the last command + the SDE's own increments since the first command
+};
+LoadInput load_input_from_string(const std::string& name);  // throws ConfigError
+std::string to_string(LoadInput mode);
+
+// The state of the lane at one publish instant (SI; the fields of GearState).
+struct LiveSample {
+  std::int64_t step = 0;  // grid index n; t = n h
+  double t = 0.0;         // grid_time(n, h): n h rounded to whole ns (engine/simulation.hpp) [s]
+  double delta = 0.0, delta_dot = 0.0, phi = 0.0;
+  double center_distance = 0.0;  // d(t) over the trailing window (0 if the sink did not want it)
+  double mesh_stiffness = 0.0, mesh_phase = 0.0;
+  double mu = 0.0, sigma = 0.0, drift = 0.0;
+  std::uint64_t realization = 0, seed = 0;
+};
+
+// What the run's parameters are from `step` on (for RunInfo).
+struct LiveRunInfo {
+  std::int64_t step = 0;
+  double t = 0.0;
+  ModelConfig config;          // with the friction coefficient (and sigma, lambda) in effect
+  SimulatorSettings settings;  // with real_time_factor and publish_rate in effect
+  LaneSpec lane;               // the lane as it steps from here on
+  LoadInput load_input;
+};
+
+enum class LiveLogLevel { Debug, Info, Warn, Error };
+
+// Where the simulation reports. Called on the stepping thread (or the thread calling iterate()).
+class LiveSink {
+ public:
+  virtual ~LiveSink() = default;
+  // Every publish instant (n a multiple of the publish period, t = 0 after a (re)start and t_end).
+  virtual void publish(const LiveSample& sample) = 0;
+  // At the start, at every reset and after every change of mu, sigma, lambda, rate or factor.
+  virtual void run_info(const LiveRunInfo& info) = 0;
+  virtual void log(LiveLogLevel level, const std::string& line) = 0;
+  // While not running (paused, at t_end, diverged): about every idle period, with the last sample.
+  virtual void idle(const LiveSample& /*last*/) {}
+  // At t_end without loop: the last sample (already published), once per run.
+  virtual void finished(const LiveSample& /*last*/) {}
+  // Whether publish() needs the center distance (it costs a window query).
+  virtual bool wants_center_distance() const { return true; }
+};
+
+// Wall time for pacing; tests inject a fake one.
+class LiveClock {
+ public:
+  using time_point = std::chrono::steady_clock::time_point;
+  virtual ~LiveClock() = default;
+  virtual time_point now() const = 0;
+};
+class SteadyLiveClock : public LiveClock {
+ public:
+  time_point now() const override { return std::chrono::steady_clock::now(); }
+};
+
+
+class LiveSimulation {
+ public:
+  // What callers ask of the stepping loop; merged until it takes them.
+  struct Request {
+    std::optional<double> mu, sigma, drift, real_time_factor, publish_rate;
+    std::optional<bool> paused;
+    bool reset = false;
+    bool step = false;
+  };
+  // How a request was answered: `ok` false with the reason when refused.
+  struct Outcome {
+    bool ok = true;
+    std::string message;
+  };
+  // For diagnostics.
+  struct Status {
+    double time = 0.0;
+    std::string state = "starting";
+    std::string divergence;
+    double mu = 0.0, sigma = 0.0, drift = 0.0, real_time_factor = 0.0, publish_rate = 0.0;
+    std::int64_t steps = 0;          // integration steps since start (monotonic, across resets)
+    std::int64_t publications = 0;   // publish instants since start
+    double running_wall = 0.0;       // wall seconds spent running (not paused) [s]
+    std::int64_t load_commands = 0;  // external load commands applied
+  };
+  // What the loop does after one iteration.
+  struct Next {
+    bool running = false;            // false: idle (paused, at t_end or diverged) until a request
+    std::optional<LiveClock::time_point> until;  // running and paced: wait until then
+  };
+
+  // Pacing does not burst to catch up a lag longer than this; it restarts from the present.
+  static constexpr std::chrono::milliseconds kMaxLag{100};
+  // Pacing sleeps only when the target is at least this far ahead: at high publish rates the loop
+  // steps several publish periods per wake-up (bursts), instead of one futex sleep per period.
+  // The simulation then leads its wall-time target by less than this.
+  static constexpr std::chrono::milliseconds kMinWait{1};
+  // While not running, the loop wakes this often (LiveSink::idle).
+  static constexpr std::chrono::milliseconds kIdlePeriod{100};
+
+  // Validated configuration (parse_config, parse_simulator_settings; settings.load_input names the
+  // LoadInput). Publishes t = 0 and the run
+  // info through `sink` at once (on the constructing thread). `sink` and `clock` must outlive it.
+  LiveSimulation(const ModelConfig& config, const SimulatorSettings& settings, LiveSink& sink,
+                 const LiveClock& clock = default_clock());
+  ~LiveSimulation();  // stop()
+
+  LiveSimulation(const LiveSimulation&) = delete;
+  LiveSimulation& operator=(const LiveSimulation&) = delete;
+
+  // ---- any thread ----
+  // Hands `r` over and waits until the loop has applied it (needs start(), or iterate() called by
+  // another thread). After stop(): {false, "shutting down"}.
+  Outcome request(const Request& r);
+  // Hands `r` over without waiting (merged with what is pending); the next iterate() applies it.
+  void post(const Request& r);
+  // An external load command [m/s^2] (used with LoadInput External/ExternalPlusNoise), applied at
+  // the next integration step; `stamp` [s] is the sender's time, logged with the step it takes
+  // effect at. The last command wins.
+  void command_load(double value, double stamp);
+  Status status() const;
+
+  // ---- the stepping loop ----
+  // Runs the loop (iterate and wait, by the real steady clock) on a thread of its own.
+  void start();
+  // Stops and joins the loop; waiting request() calls return.
+  void stop();
+  // One iteration: applies what is pending, then (running, or a ~step) integrates to the next
+  // publish instant or t_end and publishes. Returns whether it runs on and until when to wait.
+  Next iterate();
+  // The outcome of the last request applied by iterate().
+  Outcome last_outcome() const;
+
+  // ---- the stepping loop's own view (read it from the stepping thread or between iterate()) ----
+  const Ensemble& ensemble() const { return ensemble_; }
+  std::int64_t period_steps() const { return period_; }
+  std::int64_t end_step() const { return end_step_; }
+  bool paused() const { return paused_; }
+  bool finished() const { return finished_; }
+  bool diverged() const { return diverged_; }
+  const std::string& divergence() const { return divergence_; }
+  double real_time_factor() const { return real_time_factor_; }
+  LoadInput load_input() const { return load_input_; }
+
+  static const LiveClock& default_clock();
+
+ private:
+  Outcome apply(const Request& r);
+  void advance();
+  void publish();
+  void publish_run_info();
+  void restart();
+  void diverge(const std::string& what);
+  std::optional<LiveClock::time_point> pace();
+  void take_load_command();
+  bool running() const { return !paused_ && !finished_ && !diverged_; }
+  std::string state_name() const;
+  WindowRange make_window() const;
+  LiveSample sample() const;
+  void log(LiveLogLevel level, const std::string& line) { sink_.log(level, line); }
+  void loop();
+
+  // Fixed after construction.
+  const ModelConfig config_;
+  const SimulatorSettings settings_;
+  LiveSink& sink_;
+  const LiveClock& clock_;
+  const LoadInput load_input_;
+  const std::int64_t end_step_;  // 0 = run on forever
+
+  // Owned by the stepping loop.
+  Ensemble ensemble_;
+  double real_time_factor_, publish_rate_;
+  std::int64_t period_;  // grid steps per publish period
+  WindowRange window_;   // trailing-window ranges for the center distance d(t)
+  bool paused_, finished_ = false, diverged_ = false;
+  std::string divergence_;
+  bool anchored_ = false;  // pacing restarts from (anchor_wall_, anchor_step_) when false
+  LiveClock::time_point anchor_wall_;
+  std::int64_t anchor_step_ = 0;
+  std::optional<double> load_applied_;  // the command in effect (external modes)
+  Status local_;
+  Outcome last_outcome_;
+
+  // Shared between threads under mutex_.
+  mutable std::mutex mutex_;
+  std::condition_variable wake_;  // the loop waits here (pacing, idle)
+  std::condition_variable done_;  // request() waits here
+  Request pending_;
+  bool has_pending_ = false;
+  std::uint64_t requested_ = 0, applied_ = 0;
+  Outcome outcome_;
+  Status status_;
+  std::optional<std::pair<double, double>> load_command_;  // (value, stamp)
+  std::atomic<bool> load_pending_{false};
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+}  // namespace gear_dynamics

@@ -1,0 +1,434 @@
+#include "gear_dynamics/live/live_simulation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <numeric>
+#include <utility>
+
+#include "gear_dynamics/engine/simulation.hpp"
+
+namespace gear_dynamics {
+
+namespace {
+
+std::string seconds(double t) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.9g s", t);
+  return text;
+}
+
+std::string format(const char* fmt, ...) __attribute__((format(printf, 1, 2)));
+std::string format(const char* fmt, ...) {
+  char text[512];
+  va_list args;
+  va_start(args, fmt);
+  std::vsnprintf(text, sizeof text, fmt, args);
+  va_end(args);
+  return text;
+}
+
+LaneSpec lane_of(const ModelConfig& c, const SimulatorSettings& s, LoadInput input) {
+  LaneSpec lane = s.deterministic ? deterministic_lane(c, c.friction_coefficient)
+                                  : stochastic_lane(c, c.friction_coefficient, s.realization);
+  if (input == LoadInput::External) {  // Phi(0) of load.yaml's mean, then only the commands
+    lane.sigma = lane.drift = lane.load_sd = 0.0;
+  }
+  return lane;
+}
+
+}  // namespace
+
+LoadInput load_input_from_string(const std::string& name) {
+  if (name == "sde") return LoadInput::Sde;
+  if (name == "external") return LoadInput::External;
+  if (name == "external_plus_noise") return LoadInput::ExternalPlusNoise;
+  throw ConfigError("invalid configuration: simulator.load_input = '" + name +
+                    "' is not one of sde, external, external_plus_noise");
+}
+
+std::string to_string(LoadInput mode) {
+  switch (mode) {
+    case LoadInput::External: return "external";
+    case LoadInput::ExternalPlusNoise: return "external_plus_noise";
+    default: return "sde";
+  }
+}
+
+const LiveClock& LiveSimulation::default_clock() {
+  static const SteadyLiveClock clock;
+  return clock;
+}
+
+LiveSimulation::LiveSimulation(const ModelConfig& config, const SimulatorSettings& settings, LiveSink& sink,
+                               const LiveClock& clock)
+    : config_(config),
+      settings_(settings),
+      sink_(sink),
+      clock_(clock),
+      load_input_(load_input_from_string(settings.load_input)),
+      end_step_(config.run.steps_for(settings.t_end)),
+      ensemble_(derive(config.gear), config.run.time_step, config.initial, {lane_of(config, settings, load_input_)},
+                config.seed),
+      real_time_factor_(settings.real_time_factor),
+      publish_rate_(settings.publish_rate),
+      period_(publish_period_steps(publish_rate_, config.run.time_step)),
+      window_(make_window()),
+      paused_(settings.paused) {
+  restart();
+  local_.state = state_name();
+  status_ = local_;
+}
+
+LiveSimulation::~LiveSimulation() { stop(); }
+
+// ---- any thread ----
+
+void LiveSimulation::post(const Request& r) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto take = [](auto& to, const auto& from) {
+    if (from) to = from;
+  };
+  take(pending_.mu, r.mu);
+  take(pending_.sigma, r.sigma);
+  take(pending_.drift, r.drift);
+  take(pending_.real_time_factor, r.real_time_factor);
+  take(pending_.publish_rate, r.publish_rate);
+  take(pending_.paused, r.paused);
+  pending_.reset = pending_.reset || r.reset;
+  pending_.step = pending_.step || r.step;
+  has_pending_ = true;
+  ++requested_;
+  wake_.notify_all();
+}
+
+LiveSimulation::Outcome LiveSimulation::request(const Request& r) {
+  post(r);
+  std::unique_lock<std::mutex> lock(mutex_);
+  const std::uint64_t id = requested_;
+  done_.wait(lock, [&] { return applied_ >= id || stop_; });
+  return applied_ >= id ? outcome_ : Outcome{false, "shutting down"};
+}
+
+void LiveSimulation::command_load(double value, double stamp) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    load_command_ = std::make_pair(value, stamp);
+  }
+  load_pending_.store(true, std::memory_order_release);
+}
+
+LiveSimulation::Status LiveSimulation::status() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return status_;
+}
+
+LiveSimulation::Outcome LiveSimulation::last_outcome() const { return last_outcome_; }
+
+// ---- the loop ----
+
+void LiveSimulation::start() {
+  if (thread_.joinable()) return;
+  stop_ = false;
+  thread_ = std::thread(&LiveSimulation::loop, this);
+}
+
+void LiveSimulation::stop() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+  }
+  wake_.notify_all();
+  done_.notify_all();
+  if (thread_.joinable()) thread_.join();
+}
+
+void LiveSimulation::loop() {
+  while (!stop_) {
+    const auto start = std::chrono::steady_clock::now();
+    const Next next = iterate();
+    std::unique_lock<std::mutex> lock(mutex_);
+    if (next.running) {
+      if (next.until) wake_.wait_until(lock, *next.until, [&] { return has_pending_ || stop_; });
+      local_.running_wall += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      status_.running_wall = local_.running_wall;
+    } else {
+      lock.unlock();
+      sink_.idle(sample());
+      lock.lock();
+      wake_.wait_for(lock, kIdlePeriod, [&] { return has_pending_ || stop_; });
+    }
+  }
+}
+
+LiveSimulation::Next LiveSimulation::iterate() {
+  Request r;
+  std::uint64_t batch;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    r = std::exchange(pending_, Request{});
+    has_pending_ = false;
+    batch = requested_;
+  }
+  Outcome outcome = apply(r);
+  const bool stepping = r.step && outcome.ok;
+  if (running() || stepping) advance();
+  if (stepping)
+    outcome = diverged_ ? Outcome{false, divergence_} : Outcome{true, "t = " + seconds(ensemble_.time())};
+  const LaneSpec& lane = ensemble_.lane(0);
+  local_.time = ensemble_.time();
+  local_.state = state_name();
+  local_.divergence = divergence_;
+  local_.mu = lane.mu;
+  local_.sigma = lane.sigma;
+  local_.drift = lane.drift;
+  local_.real_time_factor = real_time_factor_;
+  local_.publish_rate = 1.0 / (static_cast<double>(period_) * config_.run.time_step);
+  last_outcome_ = outcome;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    applied_ = batch;
+    outcome_ = outcome;
+    status_ = local_;
+  }
+  done_.notify_all();
+  Next next;
+  next.running = running();
+  if (next.running) next.until = pace();
+  else anchored_ = false;
+  return next;
+}
+
+LiveSimulation::Outcome LiveSimulation::apply(const Request& r) {
+  const double t = ensemble_.time();
+  const auto n = static_cast<long long>(ensemble_.step_index());
+  const auto changed = [&](const char* name, double from, double to, const char* unit) {
+    log(LiveLogLevel::Info, format("%s: %g -> %g%s from t = %.9g s (step %lld)", name, from, to, unit, t, n));
+  };
+  const LaneSpec& lane = ensemble_.lane(0);
+  Request q = r;
+  if (load_input_ == LoadInput::External && ((q.sigma && *q.sigma != 0.0) || (q.drift && *q.drift != 0.0))) {
+    log(LiveLogLevel::Warn, "sigma and lambda stay 0 with the external load (simulator.load_input: external)");
+    q.sigma.reset();
+    q.drift.reset();
+  }
+  if (q.mu) {
+    changed("mu", lane.mu, *q.mu, "");
+    ensemble_.set_mu(0, *q.mu);
+  }
+  if (q.sigma) {
+    changed("sigma", lane.sigma, *q.sigma, " m/s^2/sqrt(s)");
+    ensemble_.set_sigma(0, *q.sigma);
+  }
+  if (q.drift) {
+    changed("lambda", lane.drift, *q.drift, " m/s^3");
+    ensemble_.set_drift(0, *q.drift);
+  }
+  if (q.real_time_factor) {
+    changed("real_time_factor", real_time_factor_, *q.real_time_factor, " (0 = as fast as possible)");
+    real_time_factor_ = *q.real_time_factor;
+    anchored_ = false;
+  }
+  if (q.publish_rate) {
+    const double before = 1.0 / (static_cast<double>(period_) * config_.run.time_step);
+    publish_rate_ = *q.publish_rate;
+    period_ = publish_period_steps(publish_rate_, config_.run.time_step);
+    const double effective = 1.0 / (static_cast<double>(period_) * config_.run.time_step);
+    changed("publish_rate", before, effective, " Hz simulated");
+    if (period_ % window_.block_steps() != 0)
+      log(LiveLogLevel::Info,
+          format("center_distance windows may start up to %lld steps early until ~reset (block of the "
+                 "trailing-window observer)",
+                 static_cast<long long>(window_.block_steps() - 1)));
+  }
+  if (q.reset) {
+    log(LiveLogLevel::Info, "reset: t = 0, initial state, random stream from its start");
+    restart();
+  } else if (q.mu || q.sigma || q.drift || q.real_time_factor || q.publish_rate) {
+    publish_run_info();
+  }
+
+  Outcome out;
+  const auto refuse = [&](const std::string& why) {
+    log(LiveLogLevel::Warn, why);
+    out = Outcome{false, why};
+  };
+  const std::string at_end = "the run is at t_end = " + seconds(settings_.t_end) + "; call ~reset to run again";
+  const std::string blew_up = "the run diverged (" + divergence_ + "); call ~reset to start over";
+  if (q.paused) {
+    if (*q.paused) {
+      if (!paused_) log(LiveLogLevel::Info, format("paused at t = %.9g s", ensemble_.time()));
+      paused_ = true;
+    } else if (diverged_) {
+      refuse(blew_up);
+    } else if (finished_) {
+      refuse(at_end);
+    } else {
+      if (paused_) log(LiveLogLevel::Info, format("running from t = %.9g s", ensemble_.time()));
+      paused_ = false;
+    }
+  }
+  if (q.step) {
+    if (diverged_) refuse(blew_up);
+    else if (finished_) refuse(at_end);
+    else if (!paused_) refuse("~step works while paused; call ~pause first");
+  }
+  return out;
+}
+
+void LiveSimulation::take_load_command() {
+  load_pending_.store(false, std::memory_order_relaxed);
+  std::optional<std::pair<double, double>> c;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    c = std::exchange(load_command_, std::nullopt);
+  }
+  if (!c || load_input_ == LoadInput::Sde) return;
+  const auto [value, stamp] = *c;
+  if (!std::isfinite(value)) {
+    log(LiveLogLevel::Warn, format("load command %g is not finite: ignored (stamp %.9f s)", value, stamp));
+    return;
+  }
+  const double phi = ensemble_.load()[0];
+  const double next = load_input_ == LoadInput::External || !load_applied_ ? value : phi + (value - *load_applied_);
+  const bool first = !load_applied_;
+  load_applied_ = value;
+  ensemble_.set_load(0, next);
+  ++local_.load_commands;
+  log(first ? LiveLogLevel::Info : LiveLogLevel::Debug,
+      format("load command %g m/s^2 (stamp %.9f s) in effect from step %lld (t = %.9g s): Phi = %.17g m/s^2",
+             value, stamp, static_cast<long long>(ensemble_.step_index()), ensemble_.time(), next));
+}
+
+void LiveSimulation::advance() {
+  const std::int64_t from = ensemble_.step_index();
+  std::int64_t to = (from / period_ + 1) * period_;
+  if (end_step_ > 0) to = std::min(to, end_step_);
+  try {
+    while (ensemble_.step_index() < to) {
+      if (stop_.load(std::memory_order_relaxed)) return;
+      if (load_pending_.load(std::memory_order_acquire)) take_load_command();
+      ensemble_.step();
+      window_.observe(ensemble_.step_index(), ensemble_.delta(), ensemble_.velocity());
+    }
+  } catch (const DivergenceError& e) {
+    local_.steps += ensemble_.step_index() - from;
+    diverge(e.what());
+    return;
+  }
+  local_.steps += to - from;
+  publish();
+  if (to == end_step_ && !diverged_) {
+    if (settings_.loop) {
+      log(LiveLogLevel::Info, format("t_end = %g s reached: starting over", settings_.t_end));
+      restart();
+    } else {
+      log(LiveLogLevel::Info, format("t_end = %g s reached: stopped (~reset runs again)", settings_.t_end));
+      finished_ = true;
+      sink_.finished(sample());
+    }
+  }
+}
+
+LiveSample LiveSimulation::sample() const {
+  const Ensemble& e = ensemble_;
+  LiveSample s;
+  s.step = e.step_index();
+  s.t = grid_time(s.step, e.time_step());
+  s.delta = e.delta()[0];
+  s.delta_dot = e.velocity()[0];
+  s.phi = e.load()[0];
+  s.mesh_stiffness = e.mesh().stiffness(e.time());
+  s.mesh_phase = e.mesh().phase(e.time());
+  s.mu = e.lane(0).mu;
+  s.sigma = e.lane(0).sigma;
+  s.drift = e.lane(0).drift;
+  s.realization = e.lane(0).realization;
+  s.seed = e.seed();
+  return s;
+}
+
+void LiveSimulation::publish() {
+  LiveSample s = sample();
+  if (sink_.wants_center_distance()) s.center_distance = window_.center_distance()[0];
+  if (!std::isfinite(s.delta) || !std::isfinite(s.delta_dot) || !std::isfinite(s.phi) ||
+      !std::isfinite(s.center_distance)) {
+    diverge("non-finite state at t = " + seconds(s.t) + ": delta = " + std::to_string(s.delta) +
+            " m, delta_dot = " + std::to_string(s.delta_dot) + " m/s, Phi = " + std::to_string(s.phi) + " m/s^2");
+    return;
+  }
+  sink_.publish(s);
+  ++local_.publications;
+}
+
+void LiveSimulation::publish_run_info() {
+  const LaneSpec& lane = ensemble_.lane(0);
+  LiveRunInfo info;
+  info.step = ensemble_.step_index();
+  info.t = ensemble_.time();
+  info.config = config_;
+  info.config.friction_coefficient = lane.mu;
+  if (!settings_.deterministic && load_input_ != LoadInput::External) {  // S1 ignores the load noise settings
+    info.config.load.sigma = lane.sigma;
+    info.config.load.drift = lane.drift;
+  }
+  info.settings = settings_;
+  info.settings.real_time_factor = real_time_factor_;
+  info.settings.publish_rate = publish_rate_;
+  info.lane = lane;
+  info.load_input = load_input_;
+  sink_.run_info(info);
+}
+
+void LiveSimulation::restart() {
+  ensemble_.reset();
+  window_ = make_window();
+  window_.observe(0, ensemble_.delta(), ensemble_.velocity());
+  finished_ = diverged_ = false;
+  divergence_.clear();
+  anchored_ = false;
+  load_applied_.reset();
+  publish_run_info();
+  publish();
+}
+
+void LiveSimulation::diverge(const std::string& what) {
+  log(LiveLogLevel::Error, what + "; simulation paused, nothing more is published; call ~reset to start over");
+  diverged_ = true;
+  paused_ = true;
+  divergence_ = what;
+}
+
+std::optional<LiveClock::time_point> LiveSimulation::pace() {
+  if (real_time_factor_ <= 0.0) return std::nullopt;
+  const auto now = clock_.now();
+  // Rounded to the clock's tick, not truncated: 1000 steps of 1 us at factor 1 are 1 ms exactly,
+  // whichever way the double product rounds.
+  const auto target = anchor_wall_ + std::chrono::round<LiveClock::time_point::duration>(
+                                         std::chrono::duration<double>(
+                                             static_cast<double>(ensemble_.step_index() - anchor_step_) *
+                                             config_.run.time_step / real_time_factor_));
+  if (!anchored_ || now > target + kMaxLag) {
+    anchor_wall_ = now;
+    anchor_step_ = ensemble_.step_index();
+    anchored_ = true;
+    return std::nullopt;
+  }
+  if (target - now < kMinWait) return std::nullopt;  // close enough: step on, sleep later
+  return target;
+}
+
+std::string LiveSimulation::state_name() const {
+  if (diverged_) return "diverged";
+  if (finished_) return "stopped at t_end";
+  return paused_ ? "paused" : "running";
+}
+
+WindowRange LiveSimulation::make_window() const {
+  // Blocks that make the window exact at every publish instant and at t_end (as simulate() does).
+  const std::int64_t window = std::max<std::int64_t>(config_.run.steps_for(config_.run.window), 1);
+  return WindowRange(1, window, std::gcd(std::gcd(window, period_), end_step_));
+}
+
+}  // namespace gear_dynamics

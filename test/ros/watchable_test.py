@@ -1,0 +1,62 @@
+#!/usr/bin/python3
+"""simulate.launch as a user meets it. With the defaults the node runs until stopped (t_end 0) under
+the namespace gear: every topic it publishes is /gear/... (or the global /clock, /diagnostics,
+/rosout). A finite run (namespace finite, t_end 0.05 s) keeps its last state for late subscribers:
+/finite/final_state is latched, as is /finite/run_info."""
+import sys
+import time
+import unittest
+
+import rosgraph
+import rospy
+import rostest
+from gear_dynamics.msg import GearState, RunInfo
+
+from simtest import Collector, wait_until
+
+GLOBAL = {'/clock', '/diagnostics', '/rosout'}
+
+
+def published_by(node):
+    """The topics `node` publishes, from the master."""
+    pubs, _, _ = rosgraph.Master('/watchable_test').getSystemState()
+    return sorted(t for t, nodes in pubs if node in nodes)
+
+
+class Watchable(unittest.TestCase):
+    def test_default_runs_until_stopped_under_gear(self):
+        state = Collector('/gear/state', GearState)
+        info = Collector('/gear/run_info', RunInfo)
+        self.assertEqual(info.wait_for(len, 20.0, 'run_info')[-1].duration, 0.0)  # open-ended
+        state.wait_for(lambda m: len(m) > 0 and m[-1].t > 1.5, 30.0, 't past 1.5 s')
+        # Still running: more states arrive, time goes on.
+        t = state.messages()[-1].t
+        state.wait_for(lambda m: m[-1].t > t + 0.5, 10.0, 'half a second more')
+        topics = published_by('/gear/gear_simulator')
+        self.assertIn('/gear/state', topics)
+        self.assertIn('/gear/final_state', topics)
+        self.assertEqual([t for t in topics if not t.startswith('/gear/') and t not in GLOBAL], [], topics)
+
+    def test_final_state_for_a_late_subscriber(self):
+        # Subscribe only once the finite run has ended.
+        wait_until(self._ended, 60.0, 'the finite run to end')
+        final = Collector('/finite/final_state', GearState)
+        info = Collector('/finite/run_info', RunInfo)
+        m = final.wait_for(len, 10.0, 'the latched final state')[-1]
+        self.assertEqual(m.t, 0.05)
+        self.assertEqual(info.wait_for(len, 10.0, 'the latched run_info')[-1].duration, 0.05)
+
+    @staticmethod
+    def _ended():
+        """Whether /finite/gear_simulator reports 'stopped at t_end' in its diagnostics."""
+        from diagnostic_msgs.msg import DiagnosticArray
+        try:
+            arr = rospy.wait_for_message('/diagnostics', DiagnosticArray, timeout=2.0)
+        except rospy.ROSException:
+            return False
+        return any('finite/gear_simulator' in s.name and s.message == 'stopped at t_end' for s in arr.status)
+
+
+if __name__ == '__main__':
+    rospy.init_node('watchable_test')
+    rostest.rosrun('gear_dynamics', 'watchable', Watchable, sys.argv)
