@@ -37,7 +37,9 @@ BatchSettings parse_batch_settings(const YAML::Node& section, const ModelConfig&
   if (!section || !section.IsMap())
     throw ConfigError("invalid configuration: missing section 'monte_carlo' (a map of the batch settings)");
   std::vector<std::string> errors;
-  SectionReader in(section, "monte_carlo", errors);
+  YAML::Node rest = YAML::Clone(section);  // `sweep` is optional and read by read_sweep (config/sweep.hpp)
+  rest.remove("sweep");
+  SectionReader in(rest, "monte_carlo", errors);
   BatchSettings s;
   // A key that is missing or bad keeps its default below; the checks that depend on it are left
   // out, so each problem is reported once.
@@ -72,6 +74,7 @@ BatchSettings parse_batch_settings(const YAML::Node& section, const ModelConfig&
   if (const auto v = in.number("block_lanes", 1, 4096, true, "lanes")) s.block_lanes = static_cast<int>(*v);
   if (const auto v = in.number("threads", 0, 1024, true, "threads (0 = all cores)")) s.threads = static_cast<int>(*v);
   in.finish();
+  read_sweep(section, s.mu, s.sweep, errors);
   detail::throw_if_errors(errors);
   return s;
 }

@@ -41,8 +41,9 @@ class MonteCarloNode {
     try {
       model_ = gd::load_model_config(pnh_);
       settings_ = gd::parse_batch_settings(gd::yaml_from_parameters(pnh_, {"monte_carlo"})["monte_carlo"], model_);
-      runs_ = gd::shard_runs(gd::plan_runs(model_, settings_), settings_.shard_index, settings_.shard_count);
-      todo_ = gd::prepare_folder(model_, settings_, runs_);
+      study_ = gd::make_study(model_, settings_);  // every point validated before anything runs
+      runs_ = gd::shard_runs(gd::plan_runs(study_, settings_), settings_.shard_index, settings_.shard_count);
+      todo_ = gd::prepare_folder(study_, settings_, runs_);
     } catch (const std::exception& e) {
       ROS_FATAL("gear_monte_carlo: %s", e.what());
       return false;
@@ -55,21 +56,22 @@ class MonteCarloNode {
   int run() {
     const double steps = static_cast<double>(model_.run.steps());
     ROS_INFO("gear_monte_carlo: shard %d of %d into '%s': %zu runs, %zu complete, %zu to do "
-             "(%zu mu, S1%s, %u realizations; T = %g s, h = %g s; %d threads, %d lanes per block)",
+             "(%zu points: %zu mu%s; S1%s, %u realizations; T = %g s, h = %g s; %d threads, %d lanes per block)",
              settings_.shard_index, settings_.shard_count, settings_.output_dir.c_str(), runs_.size(),
-             runs_.size() - todo_.size(), todo_.size(), settings_.mu.size(),
+             runs_.size() - todo_.size(), todo_.size(), study_.points.size(), settings_.mu.size(),
+             settings_.sweep.empty() ? "" : (" x " + std::to_string(settings_.sweep.size()) + " swept keys").c_str(),
              settings_.phase_ensemble ? " + 64 phases" : "", settings_.realizations, model_.run.duration,
              model_.run.time_step, gd::batch_threads(settings_), settings_.block_lanes);
     total_steps_ = static_cast<std::int64_t>(todo_.size()) * static_cast<std::int64_t>(steps);
     start_ = std::chrono::steady_clock::now();
-    gd::write_manifest(model_, settings_, runs_, todo_.empty());
+    gd::write_manifest(study_, settings_, runs_, todo_.empty());
 
-    gd::BagSink sink(model_, settings_.output_dir);
+    gd::BagSink sink(study_, settings_.output_dir);
     publish(sink, false);  // the totals at once, for rostopic echo
     std::thread monitor([&] { watch(sink); });
     std::string failure;
     try {
-      gd::run_batch(model_, todo_, settings_, sink, control_);
+      gd::run_batch(study_, todo_, settings_, sink, control_);
     } catch (const std::exception& e) {
       failure = e.what();
     }
@@ -87,7 +89,7 @@ class MonteCarloNode {
 
     const bool complete = sink.bags_written() == todo_.size();
     try {
-      gd::write_manifest(model_, settings_, runs_, complete);
+      gd::write_manifest(study_, settings_, runs_, complete);
     } catch (const std::exception& e) {
       if (failure.empty()) failure = e.what();
     }
@@ -163,6 +165,7 @@ class MonteCarloNode {
   ros::Publisher progress_pub_;
   gd::ModelConfig model_;
   gd::BatchSettings settings_;
+  gd::Study study_;
   std::vector<gd::RunSpec> runs_, todo_;
   gd::BatchControl control_;
   std::int64_t total_steps_ = 0;
