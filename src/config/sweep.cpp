@@ -170,6 +170,7 @@ std::string column_name(const std::string& key) { return key == kFrictionKey ? "
 ModelConfig apply_point(const ModelConfig& base, const std::vector<std::string>& keys,
                         const std::vector<double>& values) {
   YAML::Node root = to_yaml(base);
+  if (base.run.snapshot_times.empty()) root["run"]["snapshot_times"] = YAML::Node(YAML::NodeType::Sequence);
   for (std::size_t i = 0; i < keys.size(); ++i) {
     const auto dot = keys[i].find('.');
     const double v = values.at(i);
