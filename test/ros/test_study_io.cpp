@@ -159,3 +159,32 @@ TEST(StudyFolder, MuSweepKeepsFormatOne) {
   ASSERT_EQ(in.axes.size(), 1u);
   EXPECT_EQ(in.points, (std::vector<std::vector<double>>{{0.0}, {0.04}}));
 }
+
+// Shards of a study share a folder: each writes its manifest with the grid; the reader joins them.
+TEST(StudyFolder, ShardsJoinIntoOneStudy) {
+  TempDir dir;
+  const gd::ModelConfig model = short_model();
+  std::size_t total = 0;
+  for (int i = 0; i < 2; ++i) {
+    gd::BatchSettings s = study_settings(dir.path.string(), {0.0, 5.0});
+    s.shard_index = i;
+    s.shard_count = 2;
+    const gd::Study study = gd::make_study(model, s);
+    const auto runs = gd::shard_runs(gd::plan_runs(study, s), i, 2);
+    const auto todo = gd::prepare_folder(study, s, runs);
+    EXPECT_EQ(todo.size(), runs.size());
+    gd::write_manifest(study, s, runs, false);
+    gd::BagSink sink(study, s.output_dir);
+    gd::BatchControl control;
+    gd::run_batch(study, todo, s, sink, control);
+    sink.finish();
+    gd::write_manifest(study, s, runs, true);
+    total += runs.size();
+  }
+  EXPECT_TRUE(fs::exists(dir.path / "manifest_shard1of2.yaml"));
+  const gd::BatchInputs in = gd::read_batches({dir.path.string()});
+  EXPECT_EQ(in.runs.size(), total);
+  EXPECT_EQ(in.expected_runs, total);
+  EXPECT_TRUE(in.missing.empty());
+  EXPECT_EQ(in.points.size(), 8u);
+}
