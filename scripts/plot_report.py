@@ -3,6 +3,10 @@
 
 usage: plot_report.py REPORT_FOLDER [--mu 0.04]
 
+For a study with more axes than mu (points.csv with more than one axis column, doc/studies.md) it
+draws the study's figures instead: axis_<key>.png per swept axis and, for a 2-D grid,
+heatmap_d.png and heatmap_both_in.png.
+
 Every number comes from the CSV files the aggregator wrote (paper units); this script only draws.
 --mu selects the friction coefficient of the series and joint-PDF figures (the paper's 0.04).
 """
@@ -177,6 +181,68 @@ def pdf_figure(folder, name, unit, label, title, filename, out):
     out(fig, filename)
 
 
+def axis_columns(points):
+    """The axis columns of points.csv: every column between `point` and `R`."""
+    keys = list(points[0].keys())
+    return keys[1:keys.index("R")]
+
+
+def study_figures(folder, out):
+    """A figure per axis with more than one value (lines for the other axes' values), and for a
+    2-D grid heat maps of median d and of P(delta(T) in and delta_dot(T) in). From points.csv."""
+    points = read(folder, "points.csv")
+    axes = axis_columns(points)
+    values = {a: sorted(set(float(p[a]) for p in points)) for a in axes}
+    varied = [a for a in axes if len(values[a]) > 1]
+    for a in varied:
+        others = [b for b in varied if b != a]
+        lines = {}
+        for p in points:
+            lines.setdefault(tuple(float(p[b]) for b in others), []).append(p)
+        fig, (ax_d, ax_p, ax_b) = plt.subplots(1, 3, figsize=(13, 3.8))
+        for key, rows in sorted(lines.items()):
+            rows.sort(key=lambda p: float(p[a]))
+            x = col(rows, a)
+            label = ", ".join("%s = %g" % (b, v) for b, v in zip(others, key)) or None
+            med = col(rows, "d_median")
+            lo = [m - l for m, l in zip(med, col(rows, "d_median_low"))]
+            hi = [h - m for m, h in zip(med, col(rows, "d_median_high"))]
+            ax_d.errorbar(x, med, yerr=[lo, hi], marker="o", capsize=3, label=label)
+            for axis, name in ((ax_p, "d>median_phase_d"), (ax_b, "both_in")):
+                est = [100 * v for v in col(rows, name)]
+                axis.errorbar(x, est, yerr=[[e - 100 * v for e, v in zip(est, col(rows, name + "_low"))],
+                                            [100 * v - e for e, v in zip(est, col(rows, name + "_high"))]],
+                              marker="o", capsize=3, label=label)
+        ax_d.set_ylabel("median d [mm·s$^{-1/2}$] (95 % interval)")
+        ax_p.set_ylabel("P(d > phase-ensemble median) [%]")
+        ax_b.set_ylabel(r"P($\delta$(T) $\in$ I $\wedge$ $\dot{\delta}$(T) $\in$ I) [%]")
+        for axis in (ax_d, ax_p, ax_b):
+            axis.set_xlabel(a)
+            axis.grid(alpha=0.3)
+        if others:
+            ax_d.legend(fontsize=7)
+        fig.suptitle("Along %s" % a)
+        out(fig, "axis_%s.png" % a)
+    if len(varied) == 2:
+        a, b = varied
+        for name, label, filename in (("d_median", "median d [mm·s$^{-1/2}$]", "heatmap_d.png"),
+                                      ("both_in", r"P($\delta$ $\in$ I $\wedge$ $\dot{\delta}$ $\in$ I)", "heatmap_both_in.png")):
+            grid = [[float("nan")] * len(values[a]) for _ in values[b]]
+            for p in points:
+                grid[values[b].index(float(p[b]))][values[a].index(float(p[a]))] = float(p[name])
+            fig, ax = plt.subplots(figsize=(1.2 * len(values[a]) + 2.5, 0.8 * len(values[b]) + 1.8))
+            im = ax.imshow(grid, origin="lower", aspect="auto", cmap="viridis")
+            ax.set_xticks(range(len(values[a])), ["%g" % v for v in values[a]])
+            ax.set_yticks(range(len(values[b])), ["%g" % v for v in values[b]])
+            for i, row in enumerate(grid):
+                for j, v in enumerate(row):
+                    ax.text(j, i, "%.3g" % v, ha="center", va="center", color="w", fontsize=8)
+            ax.set_xlabel(a)
+            ax.set_ylabel(b)
+            fig.colorbar(im, ax=ax, label=label)
+            out(fig, filename)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("folder")
@@ -188,6 +254,12 @@ def main():
         fig.savefig(os.path.join(args.folder, filename), dpi=120)
         plt.close(fig)
 
+    points = os.path.join(args.folder, "points.csv")
+    study = os.path.exists(points) and len(axis_columns(read(args.folder, "points.csv"))) > 1
+    if study:  # a study with more axes than mu: its figures, not the paper's
+        study_figures(args.folder, out)
+        print("plot_report: study figures written to %s" % args.folder)
+        return
     series_figures(args.folder, args.mu, out)
     center_distance_figures(args.folder, out)
     joint_figure(args.folder, args.mu, out)

@@ -3,12 +3,21 @@
 # the default Monte Carlo batch, then the aggregator's report (launch/paper.launch).
 #   GD_OUTPUT  batch folder (default: batches/paper in the repository); re-running resumes it
 #   GD_REPORT  report folder (default: report/ in the repository)
-# Extra arguments go to roslaunch, e.g. realizations:=1000.
+# Extra arguments go to roslaunch, e.g. realizations:=1000, or study:=noise (a study of config/studies/).
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/setup.sh"
 
-batch=${GD_OUTPUT:-$GD_REPO/batches/paper}
-report=${GD_REPORT:-$GD_REPO/report}
+# study:=NAME runs config/studies/NAME.yaml (doc/studies.md) into batches/study-NAME and report/study-NAME.
+study=
+for a in "$@"; do case $a in study:=*) study=${a#study:=} ;; esac; done
+if [ -n "$study" ]; then
+  [ -f "$GD_REPO/config/studies/$study.yaml" ] || { echo "reproduce: no study config/studies/$study.yaml" >&2; exit 2; }
+  batch=${GD_OUTPUT:-$GD_REPO/batches/study-$study}
+  report=${GD_REPORT:-$GD_REPO/report/study-$study}
+else
+  batch=${GD_OUTPUT:-$GD_REPO/batches/paper}
+  report=${GD_REPORT:-$GD_REPO/report}
+fi
 mkdir -p "$batch" "$report"
 # A master of our own on a free port: never another user's roscore (and its node names).
 port=$(/usr/bin/python3 -c 'import socket; s = socket.socket(); s.bind(("", 0)); print(s.getsockname()[1])')

@@ -34,7 +34,9 @@ Proportion count_if(const std::vector<double>& v, Pred pred, double confidence) 
   return wilson(static_cast<std::size_t>(std::count_if(v.begin(), v.end(), pred)), v.size(), confidence);
 }
 
-MuAnalysis analyse_mu(double mu, const std::vector<const RunRecord*>& runs, const AnalysisSettings& s) {
+}  // namespace
+
+MuAnalysis analyse_group(double mu, const std::vector<const RunRecord*>& runs, const AnalysisSettings& s) {
   MuAnalysis a;
   a.mu = mu;
   std::vector<double> d, tss, tss_fine, fd, fv, pd, ptss, pfd, pfv;
@@ -101,8 +103,6 @@ MuAnalysis analyse_mu(double mu, const std::vector<const RunRecord*>& runs, cons
   return a;
 }
 
-}  // namespace
-
 BatchAnalysis analyse(const std::vector<RunRecord>& runs, const AnalysisSettings& settings) {
   BatchAnalysis out;
   out.settings = settings;
@@ -112,7 +112,7 @@ BatchAnalysis analyse(const std::vector<RunRecord>& runs, const AnalysisSettings
   std::vector<std::vector<double>> groups;
   std::map<std::uint32_t, std::vector<double>> by_realization;  // d at each mu, in mu order
   for (const auto& [mu, group] : by_mu) {
-    out.mu.push_back(analyse_mu(mu, group, settings));
+    out.mu.push_back(analyse_group(mu, group, settings));
     groups.emplace_back();
     for (const RunRecord* r : group) {
       if (r->kind != RunKind::Stochastic) continue;

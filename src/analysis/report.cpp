@@ -1,5 +1,7 @@
 #include "gear_dynamics/analysis/report.hpp"
 
+#include "gear_dynamics/analysis/study_analysis.hpp"
+
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -89,13 +91,13 @@ class Csv {
 
 const char* kBoxHeader = "n,min,q1,median,q3,max,median_low,median_high,median_coverage";
 
-void box_row(Csv& csv, double mu, const char* group, const char* quantity, const char* unit, const BoxStats& b,
+void box_row(Csv& csv, const std::string& mu, const char* group, const char* quantity, const char* unit, const BoxStats& b,
              double scale) {
   csv.row(mu, group, quantity, unit, b.n, b.min * scale, b.q1 * scale, b.median * scale, b.q3 * scale,
           b.max * scale, b.median_low * scale, b.median_high * scale, b.median_coverage);
 }
 
-void probability_row(Csv& csv, double mu, const char* quantity, const std::string& reference, const Proportion& p,
+void probability_row(Csv& csv, const std::string& mu, const char* quantity, const std::string& reference, const Proportion& p,
                      double paper) {
   csv.row(mu, quantity, reference, p.successes, p.trials, p.estimate, p.low, p.high, paper, inside(paper, p));
 }
@@ -120,7 +122,8 @@ const std::vector<PaperReference>& paper_reference() {
   return table;
 }
 
-std::vector<std::string> write_report(const std::string& folder, const BatchInputs& in, const BatchAnalysis& a) {
+std::vector<std::string> write_report(const std::string& folder, const BatchInputs& in, const BatchAnalysis& a,
+                                      const StudyAnalysis* study) {
   const fs::path dir(folder);
   std::error_code ec;
   fs::create_directories(dir, ec);
@@ -128,6 +131,11 @@ std::vector<std::string> write_report(const std::string& folder, const BatchInpu
   std::vector<std::string> written;
   const AnalysisSettings& s = a.settings;
   const bool paper_table4 = paper_intervals(s);
+  // Row keys: mu for the mu sweep (as before studies), else the point and its values.
+  const std::string kh = a.key_header.empty() ? "mu" : a.key_header;
+  const auto key = [&](const MuAnalysis& m) {
+    return a.keys.empty() ? csv_num(m.mu) : a.keys.at(static_cast<std::size_t>(&m - a.mu.data()));
+  };
 
   {
     Csv c(dir / "batch.csv", written, "key,value,unit");
@@ -151,73 +159,73 @@ std::vector<std::string> write_report(const std::string& folder, const BatchInpu
             r.final_phi * U);
   }
   {
-    Csv c(dir / "box_stats.csv", written, std::string("mu,group,quantity,unit,") + kBoxHeader);
+    Csv c(dir / "box_stats.csv", written, kh + ",group,quantity,unit," + kBoxHeader);
     for (const MuAnalysis& m : a.mu) {
-      box_row(c, m.mu, "stochastic", "d", "mm*s^-1/2", m.center_distance, U);
-      box_row(c, m.mu, "stochastic", "t_ss", "s", m.steady_state_time, 1);
-      box_row(c, m.mu, "stochastic", "t_ss_fine", "s", m.steady_state_time_fine, 1);
-      box_row(c, m.mu, "stochastic", "delta_T", "mm", m.final_delta, U);
-      box_row(c, m.mu, "stochastic", "delta_dot_T", "mm/s", m.final_delta_dot, U);
-      box_row(c, m.mu, "phase", "d", "mm*s^-1/2", m.phase_center_distance, U);
-      box_row(c, m.mu, "phase", "t_ss", "s", m.phase_steady_state_time, 1);
-      box_row(c, m.mu, "phase", "delta_T", "mm", m.phase_final_delta, U);
-      box_row(c, m.mu, "phase", "delta_dot_T", "mm/s", m.phase_final_delta_dot, U);
+      box_row(c, key(m), "stochastic", "d", "mm*s^-1/2", m.center_distance, U);
+      box_row(c, key(m), "stochastic", "t_ss", "s", m.steady_state_time, 1);
+      box_row(c, key(m), "stochastic", "t_ss_fine", "s", m.steady_state_time_fine, 1);
+      box_row(c, key(m), "stochastic", "delta_T", "mm", m.final_delta, U);
+      box_row(c, key(m), "stochastic", "delta_dot_T", "mm/s", m.final_delta_dot, U);
+      box_row(c, key(m), "phase", "d", "mm*s^-1/2", m.phase_center_distance, U);
+      box_row(c, key(m), "phase", "t_ss", "s", m.phase_steady_state_time, 1);
+      box_row(c, key(m), "phase", "delta_T", "mm", m.phase_final_delta, U);
+      box_row(c, key(m), "phase", "delta_dot_T", "mm/s", m.phase_final_delta_dot, U);
     }
   }
   {
     Csv c(dir / "probabilities.csv", written,
-          "mu,quantity,reference,successes,trials,estimate,wilson_low,wilson_high,paper,paper_in_interval");
+          kh + ",quantity,reference,successes,trials,estimate,wilson_low,wilson_high,paper,paper_in_interval");
     for (const MuAnalysis& m : a.mu) {
-      const PaperReference* p = paper_at(m.mu);
+      const PaperReference* p = a.keys.empty() ? paper_at(m.mu) : nullptr;  // a study's points are not the paper's
       const double nan = std::nan("");
-      const double p93 = std::abs(m.mu - kPaperMuExceeds) < 1e-9 ? kPaperExceedsS1 : nan;
-      probability_row(c, m.mu, "d>d_S1", m.s1 ? csv_num(m.s1->center_distance * U) + " mm*s^-1/2" : "no S1",
+      const double p93 = p && std::abs(m.mu - kPaperMuExceeds) < 1e-9 ? kPaperExceedsS1 : nan;
+      probability_row(c, key(m), "d>d_S1", m.s1 ? csv_num(m.s1->center_distance * U) + " mm*s^-1/2" : "no S1",
                       m.d_exceeds_s1, p93);
-      probability_row(c, m.mu, "d>median_phase_d", csv_num(m.phase_center_distance.median * U) + " mm*s^-1/2",
+      probability_row(c, key(m), "d>median_phase_d", csv_num(m.phase_center_distance.median * U) + " mm*s^-1/2",
                       m.d_exceeds_phase_median, nan);
-      probability_row(c, m.mu, "delta_T_in", interval_text(s.delta_interval, 4) + " mm", m.delta_in_interval,
+      probability_row(c, key(m), "delta_T_in", interval_text(s.delta_interval, 4) + " mm", m.delta_in_interval,
                       p && paper_table4 ? p->p_delta / 100 : nan);
-      probability_row(c, m.mu, "delta_dot_T_in", interval_text(s.delta_dot_interval, 1) + " mm/s",
+      probability_row(c, key(m), "delta_dot_T_in", interval_text(s.delta_dot_interval, 1) + " mm/s",
                       m.delta_dot_in_interval, p && paper_table4 ? p->p_delta_dot / 100 : nan);
-      probability_row(c, m.mu, "t_ss<T", "T = " + csv_num(in.config.run.duration) + " s", m.reached_steady_state, nan);
+      probability_row(c, key(m), "t_ss<T", "T = " + csv_num(in.config.run.duration) + " s", m.reached_steady_state, nan);
     }
   }
   {
     Csv c(dir / "table3.csv", written,
-          "mu,s1_delta_T[mm],paper_delta_T[mm],s1_delta_dot_T[mm/s],paper_delta_dot_T[mm/s],s1_d[mm*s^-1/2],"
+          kh + ",s1_delta_T[mm],paper_delta_T[mm],s1_delta_dot_T[mm/s],paper_delta_dot_T[mm/s],s1_d[mm*s^-1/2],"
           "s2_d[mm*s^-1/2],s3_d[mm*s^-1/2],s1_t_ss[s]");
     for (const MuAnalysis& m : a.mu) {
-      const PaperReference* p = paper_at(m.mu);
+      const PaperReference* p = a.keys.empty() ? paper_at(m.mu) : nullptr;
       const double nan = std::nan("");
-      c.row(m.mu, m.s1 ? m.s1->final_delta * U : nan, p ? p->delta_T : nan, m.s1 ? m.s1->final_delta_dot * U : nan,
+      c.row(key(m), m.s1 ? m.s1->final_delta * U : nan, p ? p->delta_T : nan, m.s1 ? m.s1->final_delta_dot * U : nan,
             p ? p->delta_dot_T : nan, m.s1 ? m.s1->center_distance * U : nan, optional_value(m.s2_center_distance) * U,
             optional_value(m.s3_center_distance) * U, m.s1 ? m.s1->steady_state_time : nan);
     }
   }
   {
-    Csv cd(dir / "pdf_delta.csv", written, "mu,lo[mm],hi[mm],count,density[1/mm]");
-    Csv cv(dir / "pdf_delta_dot.csv", written, "mu,lo[mm/s],hi[mm/s],count,density[s/mm]");
+    Csv cd(dir / "pdf_delta.csv", written, kh + ",lo[mm],hi[mm],count,density[1/mm]");
+    Csv cv(dir / "pdf_delta_dot.csv", written, kh + ",lo[mm/s],hi[mm/s],count,density[s/mm]");
     Csv cj(dir / "joint_pdf.csv", written,
-           "mu,t[s],delta_lo[mm],delta_hi[mm],delta_dot_lo[mm/s],delta_dot_hi[mm/s],count,density[s/mm^2]");
-    Csv co(dir / "pdf_outside.csv", written, "mu,quantity,t[s],outside,total,fraction");
+           kh + ",t[s],delta_lo[mm],delta_hi[mm],delta_dot_lo[mm/s],delta_dot_hi[mm/s],count,density[s/mm^2]");
+    Csv co(dir / "pdf_outside.csv", written, kh + ",quantity,t[s],outside,total,fraction");
     for (const MuAnalysis& m : a.mu) {
       for (std::size_t i = 0; i < m.delta_pdf.counts.size(); ++i)
-        cd.row(m.mu, m.delta_pdf.edges[i] * U, m.delta_pdf.edges[i + 1] * U, m.delta_pdf.counts[i],
+        cd.row(key(m), m.delta_pdf.edges[i] * U, m.delta_pdf.edges[i + 1] * U, m.delta_pdf.counts[i],
                m.delta_pdf.density(i) / U);
       for (std::size_t i = 0; i < m.delta_dot_pdf.counts.size(); ++i)
-        cv.row(m.mu, m.delta_dot_pdf.edges[i] * U, m.delta_dot_pdf.edges[i + 1] * U, m.delta_dot_pdf.counts[i],
+        cv.row(key(m), m.delta_dot_pdf.edges[i] * U, m.delta_dot_pdf.edges[i + 1] * U, m.delta_dot_pdf.counts[i],
                m.delta_dot_pdf.density(i) / U);
       const double T = in.config.run.duration;
-      co.row(m.mu, "delta_T", T, m.delta_pdf.outside, m.delta_pdf.total, m.delta_pdf.fraction_outside());
-      co.row(m.mu, "delta_dot_T", T, m.delta_dot_pdf.outside, m.delta_dot_pdf.total, m.delta_dot_pdf.fraction_outside());
+      co.row(key(m), "delta_T", T, m.delta_pdf.outside, m.delta_pdf.total, m.delta_pdf.fraction_outside());
+      co.row(key(m), "delta_dot_T", T, m.delta_dot_pdf.outside, m.delta_dot_pdf.total, m.delta_dot_pdf.fraction_outside());
       for (std::size_t k = 0; k < m.joint_pdf.size(); ++k) {
         const Histogram2D& h = m.joint_pdf[k];
         const std::size_t ny = h.y_edges.size() - 1;
         for (std::size_t i = 0; i + 1 < h.x_edges.size(); ++i)
           for (std::size_t j = 0; j < ny; ++j)
-            cj.row(m.mu, s.joint_times[k], h.x_edges[i] * U, h.x_edges[i + 1] * U, h.y_edges[j] * U,
+            cj.row(key(m), s.joint_times[k], h.x_edges[i] * U, h.x_edges[i + 1] * U, h.y_edges[j] * U,
                    h.y_edges[j + 1] * U, h.counts[i * ny + j], h.density(i, j) / (U * U));
-        co.row(m.mu, "joint", s.joint_times[k], h.outside, h.total, h.fraction_outside());
+        co.row(key(m), "joint", s.joint_times[k], h.outside, h.total, h.fraction_outside());
       }
     }
   }
@@ -232,6 +240,9 @@ std::vector<std::string> write_report(const std::string& folder, const BatchInpu
     for (const SkippedFile& f : in.skipped) c.row(quoted(f.file), "skipped", quoted(f.reason));
     for (const std::string& m : in.missing) c.row(quoted(m), "missing", "");
   }
+
+  if (study) write_study_files(folder, in, *study, s, written);
+  if (study && study->swept()) return written;  // its report.md is organised by axis
 
   // ---- report.md ----
   const fs::path md = dir / "report.md";

@@ -83,7 +83,8 @@ BatchSettings parse_batch_settings(const YAML::Node& section, const ModelConfig&
   if (in.ok("shard_count") && in.ok("shard_index") && s.shard_index >= s.shard_count)
     in.error("shard_index", " = " + std::to_string(s.shard_index) + " is out of range; allowed [0, " +
                                 std::to_string(s.shard_count - 1) + "] (integer) (below shard_count)");
-  in.finish();
+  in.finish({"sweep"});  // optional, a list of axes: read by read_sweep (config/sweep.hpp)
+  read_sweep(section, s.mu, s.sweep, errors);
   detail::throw_if_errors(errors);
   return s;
 }

@@ -18,43 +18,59 @@ namespace gear_dynamics {
 
 namespace {
 
-std::string run_name(double mu, RunKind kind, std::uint32_t index) {
+std::string run_name(const Study& study, std::size_t point, double mu, RunKind kind, std::uint32_t index) {
   char buf[32];
-  if (kind == RunKind::S1) return mu_label(mu) + "_S1";
+  std::string prefix = mu_label(mu);
+  if (study.swept()) {
+    std::snprintf(buf, sizeof buf, "p%04zu_", point);
+    prefix = buf + prefix;
+  }
+  if (kind == RunKind::S1) return prefix + "_S1";
   if (kind == RunKind::Phase) std::snprintf(buf, sizeof buf, "_phase%02u", index);
   else std::snprintf(buf, sizeof buf, "_r%05u", index);
-  return mu_label(mu) + buf;
+  return prefix + buf;
 }
 
 }  // namespace
 
-std::vector<RunSpec> plan_runs(const ModelConfig& model, const BatchSettings& s) {
-  const double h = model.run.time_step;
-  const auto every = [h](double rate) { return rate > 0.0 ? std::llround(1.0 / (rate * h)) : 0; };
-  const double phase_step = derive(model.gear).mesh_period_angle / kPhaseEnsembleSize;
+Study make_study(const ModelConfig& model, const BatchSettings& settings) {
+  return make_study(model, settings.mu, settings.sweep);
+}
+
+std::vector<RunSpec> plan_runs(const Study& study, const BatchSettings& s) {
   std::vector<RunSpec> runs;
-  const auto add = [&](double mu, RunKind kind, std::uint32_t index, double phase, double rate) {
-    RunSpec r;
-    r.id = runs.size();
-    r.name = run_name(mu, kind, index);
-    r.kind = kind;
-    r.mu = mu;
-    r.index = index;
-    r.mesh_phase = phase;
-    r.record_every = every(rate);
-    runs.push_back(std::move(r));
-  };
-  for (double mu : s.mu) {
-    add(mu, RunKind::S1, 0, model.gear.mesh_phase, s.record_rate);
+  for (const StudyPoint& point : study.points) {
+    const ModelConfig& model = point.config;
+    const double h = model.run.time_step;
+    const auto every = [h](double rate) { return rate > 0.0 ? std::llround(1.0 / (rate * h)) : 0; };
+    const double phase_step = derive(model.gear).mesh_period_angle / kPhaseEnsembleSize;
+    const double mu = model.friction_coefficient;
+    const auto add = [&](RunKind kind, std::uint32_t index, double phase, double rate) {
+      RunSpec r;
+      r.id = runs.size();
+      r.name = run_name(study, point.index, mu, kind, index);
+      r.kind = kind;
+      r.mu = mu;
+      r.index = index;
+      r.mesh_phase = phase;
+      r.record_every = every(rate);
+      r.point = point.index;
+      r.schedule = point.schedule;
+      runs.push_back(std::move(r));
+    };
+    add(RunKind::S1, 0, model.gear.mesh_phase, s.record_rate);
     if (s.phase_ensemble) {
       for (int j = 0; j < kPhaseEnsembleSize; ++j)
-        add(mu, RunKind::Phase, static_cast<std::uint32_t>(j), j * phase_step, s.sparse_record_rate);
+        add(RunKind::Phase, static_cast<std::uint32_t>(j), j * phase_step, s.sparse_record_rate);
     }
     for (std::uint32_t r = 0; r < s.realizations; ++r)
-      add(mu, RunKind::Stochastic, r, model.gear.mesh_phase,
-          r < s.record_realizations ? s.record_rate : s.sparse_record_rate);
+      add(RunKind::Stochastic, r, model.gear.mesh_phase, r < s.record_realizations ? s.record_rate : s.sparse_record_rate);
   }
   return runs;
+}
+
+std::vector<RunSpec> plan_runs(const ModelConfig& model, const BatchSettings& s) {
+  return plan_runs(make_study(model, s), s);
 }
 
 std::vector<RunSpec> shard_runs(const std::vector<RunSpec>& runs, int index, int count) {
@@ -76,12 +92,20 @@ LaneSpec run_lane(const ModelConfig& model, const RunSpec& run) {
   return deterministic_lane(model, run.mu);
 }
 
+ModelConfig run_config(const Study& study, const RunSpec& run) {
+  return run_config(study.points.at(run.point).config, run);
+}
+
+LaneSpec run_lane(const Study& study, const RunSpec& run) { return run_lane(study.points.at(run.point).config, run); }
+
 std::vector<std::vector<RunSpec>> make_blocks(const std::vector<RunSpec>& runs, int lanes) {
   // Lanes of one Ensemble share its mesh schedule (phi0) and one Recorder (record interval).
-  std::map<std::tuple<double, std::int64_t>, std::vector<RunSpec>> groups;
+  // Lanes may differ only in what LaneSpec carries (mu, the load): the schedule groups study points
+  // that share everything else (a pinion speed, a backlash... need blocks of their own).
+  std::map<std::tuple<std::size_t, double, std::int64_t>, std::vector<RunSpec>> groups;
   std::vector<std::vector<RunSpec>> blocks;
   for (const RunSpec& r : runs) {
-    std::vector<RunSpec>& g = groups[{r.mesh_phase, r.record_every}];
+    std::vector<RunSpec>& g = groups[{r.schedule, r.mesh_phase, r.record_every}];
     g.push_back(r);
     if (static_cast<int>(g.size()) == lanes) blocks.push_back(std::move(g)), g.clear();
   }
@@ -96,6 +120,12 @@ int batch_threads(const BatchSettings& settings) {
 
 void run_batch(const ModelConfig& model, const std::vector<RunSpec>& runs,
                const BatchSettings& settings, BatchSink& sink, BatchControl& control) {
+  run_batch(make_study(model, settings), runs, settings, sink, control);
+}
+
+void run_batch(const Study& study, const std::vector<RunSpec>& runs,
+               const BatchSettings& settings, BatchSink& sink, BatchControl& control) {
+  const ModelConfig& model = study.base;  // run.* is common to every point
   struct Abandon {};  // thrown out of simulate() by the recorder once stop is set
   // Densely recorded blocks first: their bags take the writer longest, so it starts on them while
   // the other blocks are stepped.
@@ -120,13 +150,14 @@ void run_batch(const ModelConfig& model, const std::vector<RunSpec>& runs,
       if (e.step_index() > 0) control.realization_steps += width * recorder.every;
     };
     try {
-      GearInputs gear = model.gear;
+      const ModelConfig& point = study.points.at(block.front().point).config;  // shared by the block
+      GearInputs gear = point.gear;
       gear.mesh_phase = block.front().mesh_phase;
       std::vector<LaneSpec> lanes;
-      for (const RunSpec& r : block) lanes.push_back(run_lane(model, r));
-      Ensemble ensemble(derive(gear), model.run.time_step, model.initial, std::move(lanes), model.seed);
+      for (const RunSpec& r : block) lanes.push_back(run_lane(study, r));
+      Ensemble ensemble(derive(gear), point.run.time_step, point.initial, std::move(lanes), point.seed);
       sink.started(block);
-      const std::vector<RunResult> results = simulate(ensemble, model.run, recorder);
+      const std::vector<RunResult> results = simulate(ensemble, point.run, recorder);
       if (recorder.every == 0) control.realization_steps += width * total;
       sink.finished(block, results);
     } catch (const Abandon&) {

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <filesystem>
 
+#include "gear_dynamics/analysis/study_analysis.hpp"
 #include "gear_dynamics/ros/batch_reader.hpp"
 #include "gear_dynamics/ros/conversions.hpp"
 #include "gear_dynamics/ros/report_message.hpp"
@@ -30,8 +31,9 @@ bool AggregatorNode::run() {
     options.series_csv = (std::filesystem::path(report_folder_) / "series.csv").string();
     options.series_mu = settings_.series_mu;
     const BatchInputs inputs = read_batches(settings_.folders, options);
-    const BatchAnalysis analysis = analyse(inputs.runs, settings_.analysis);
-    write_report(report_folder_, inputs, analysis);
+    StudyAnalysis study;  // per point and axis (doc/studies.md); the mu sweep's analysis is analyse()'s
+    const BatchAnalysis analysis = analyse_batch(inputs, settings_.analysis, study);
+    write_report(report_folder_, inputs, analysis, &study);
     plot();
     publisher_.publish(make_report_message(inputs, analysis, report_folder_));
   } catch (const std::exception& ex) {

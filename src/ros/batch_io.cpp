@@ -43,7 +43,7 @@ bool is_manifest(const std::string& file) { return file.rfind("manifest", 0) == 
 
 // Why the folder cannot take this shard of this batch, or "" if it can. Shards of one batch may
 // share a folder (each writes its own manifest); anything else is another batch.
-std::string refusal(const fs::path& dir, const YAML::Node& config, const BatchSettings& s) {
+std::string refusal(const fs::path& dir, const YAML::Node& config, const BatchSettings& s, const std::string& format) {
   bool manifests = false, other_files = false;
   for (const auto& entry : fs::directory_iterator(dir)) {
     const std::string file = entry.path().filename().string();
@@ -58,8 +58,8 @@ std::string refusal(const fs::path& dir, const YAML::Node& config, const BatchSe
     } catch (const YAML::Exception& e) {
       return entry.path().string() + " is not valid YAML (" + e.what() + ")";
     }
-    if (!m.IsMap() || !m["format"] || m["format"].as<std::string>() != kManifestFormat)
-      return entry.path().string() + " is not a " + kManifestFormat + " manifest";
+    if (!m.IsMap() || !m["format"] || m["format"].as<std::string>() != format)
+      return entry.path().string() + " is not a " + format + " manifest";
     if (emit(m["config"]) != emit(config)) return "it holds a batch with a different configuration (" + file + ")";
     if (!m["shard_count"] || m["shard_count"].as<int>() != s.shard_count)
       return "it holds the same batch split into " + (m["shard_count"] ? m["shard_count"].as<std::string>() : "?") +
@@ -78,12 +78,33 @@ std::string manifest_file(const BatchSettings& settings) {
 YAML::Node batch_config_yaml(const ModelConfig& model, const BatchSettings& settings) {
   YAML::Node n = to_yaml(model);
   n["monte_carlo"] = content_yaml(settings);
+  for (const SweepAxis& a : settings.sweep) {  // only a study has it: a mu sweep's config is as before
+    YAML::Node values;
+    for (double v : a.values) values.push_back(v);
+    values.SetStyle(YAML::EmitterStyle::Flow);
+    n["monte_carlo"]["sweep"][a.key] = values;
+  }
   return n;
 }
+
+const char* manifest_format(const Study& study) { return study.swept() ? kManifestFormatStudy : kManifestFormat; }
 
 RunInfo run_info(const ModelConfig& model, const RunSpec& run) {
   return make_run_info(run_config(model, run), run.kind, run.index, run.mu, run_lane(model, run).sigma,
                        model.run.duration);
+}
+
+RunInfo run_info(const Study& study, const RunSpec& run) {
+  RunInfo info = make_run_info(run_config(study, run), run.kind, run.index, run.mu, run_lane(study, run).sigma,
+                               study.base.run.duration);
+  if (study.swept()) {
+    YAML::Node n = YAML::Load(info.parameters_yaml);
+    const StudyPoint& p = study.points.at(run.point);
+    n["study"]["point"] = p.index;
+    for (std::size_t a = 0; a < study.axes.size(); ++a) n["study"]["values"][study.axes[a].key] = p.values[a];
+    info.parameters_yaml = emit(n);
+  }
+  return info;
 }
 
 bool bag_complete(const std::string& path, const RunInfo& expected) {
@@ -101,13 +122,19 @@ bool bag_complete(const std::string& path, const RunInfo& expected) {
 
 std::vector<RunSpec> prepare_folder(const ModelConfig& model, const BatchSettings& settings,
                                     const std::vector<RunSpec>& runs) {
+  return prepare_folder(make_study(model, settings), settings, runs);
+}
+
+std::vector<RunSpec> prepare_folder(const Study& study, const BatchSettings& settings,
+                                    const std::vector<RunSpec>& runs) {
+  const ModelConfig& model = study.base;
   const fs::path dir(settings.output_dir);
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec || !fs::is_directory(dir))
     throw std::runtime_error("monte_carlo.output_dir = '" + settings.output_dir + "' cannot be created: " + ec.message());
 
-  const std::string why = refusal(dir, batch_config_yaml(model, settings), settings);
+  const std::string why = refusal(dir, batch_config_yaml(model, settings), settings, manifest_format(study));
   if (!why.empty()) {
     if (!settings.overwrite) {
       throw std::runtime_error("monte_carlo.output_dir = '" + settings.output_dir + "' is refused: " + why +
@@ -122,7 +149,7 @@ std::vector<RunSpec> prepare_folder(const ModelConfig& model, const BatchSetting
   std::vector<RunSpec> todo;
   for (const RunSpec& run : runs) {
     const fs::path bag = bag_path(settings.output_dir, run.name);
-    if (fs::exists(bag) && bag_complete(bag.string(), run_info(model, run))) continue;
+    if (fs::exists(bag) && bag_complete(bag.string(), run_info(study, run))) continue;
     fs::remove(bag);
     fs::remove(active_path(settings.output_dir, run.name));
     todo.push_back(run);
@@ -132,19 +159,36 @@ std::vector<RunSpec> prepare_folder(const ModelConfig& model, const BatchSetting
 
 void write_manifest(const ModelConfig& model, const BatchSettings& settings,
                     const std::vector<RunSpec>& runs, bool complete) {
+  write_manifest(make_study(model, settings), settings, runs, complete);
+}
+
+void write_manifest(const Study& study, const BatchSettings& settings,
+                    const std::vector<RunSpec>& runs, bool complete) {
+  const ModelConfig& model = study.base;
+  const bool swept = study.swept();
   YAML::Emitter out;
   out << YAML::BeginMap;
-  out << YAML::Key << "format" << YAML::Value << kManifestFormat;
+  out << YAML::Key << "format" << YAML::Value << manifest_format(study);
   out << YAML::Key << "package_version" << YAML::Value << GEAR_DYNAMICS_VERSION;
   out << YAML::Key << "complete" << YAML::Value << complete;  // every run's bag was written
   out << YAML::Key << "config" << YAML::Value << batch_config_yaml(model, settings);
   out << YAML::Key << "shard_index" << YAML::Value << settings.shard_index;
   out << YAML::Key << "shard_count" << YAML::Value << settings.shard_count;
+  if (swept) {  // format 2: the grid, one entry per point with its value on every axis
+    out << YAML::Key << "axes" << YAML::Value << YAML::Flow << study.keys();
+    out << YAML::Key << "points" << YAML::Value << YAML::BeginSeq;
+    for (const StudyPoint& p : study.points)
+      out << YAML::Flow << YAML::BeginMap << YAML::Key << "point" << YAML::Value << p.index << YAML::Key << "values"
+          << YAML::Value << YAML::Flow << p.values << YAML::EndMap;
+    out << YAML::EndSeq;
+  }
   out << YAML::Key << "runs" << YAML::Value << YAML::BeginSeq;
   for (const RunSpec& r : runs) {
     out << YAML::Flow << YAML::BeginMap << YAML::Key << "name" << YAML::Value << r.name << YAML::Key << "kind"
         << YAML::Value << to_string(r.kind) << YAML::Key << "mu" << YAML::Value << r.mu << YAML::Key << "realization"
-        << YAML::Value << r.index << YAML::Key << "file" << YAML::Value << r.name + ".bag" << YAML::EndMap;
+        << YAML::Value << r.index;
+    if (swept) out << YAML::Key << "point" << YAML::Value << r.point;
+    out << YAML::Key << "file" << YAML::Value << r.name + ".bag" << YAML::EndMap;
   }
   out << YAML::EndSeq << YAML::EndMap;
 
@@ -162,6 +206,12 @@ void write_manifest(const ModelConfig& model, const BatchSettings& settings,
 BagSink::BagSink(const ModelConfig& model, std::string folder, std::size_t queue_capacity)
     : model_(model), folder_(std::move(folder)), capacity_(queue_capacity), thread_([this] { loop(); }) {}
 
+BagSink::BagSink(const Study& study, std::string folder, std::size_t queue_capacity)
+    : model_(study.base), study_(study), folder_(std::move(folder)), capacity_(queue_capacity),
+      thread_([this] { loop(); }) {}
+
+RunInfo BagSink::info(const RunSpec& run) const { return study_ ? run_info(*study_, run) : run_info(model_, run); }
+
 BagSink::~BagSink() {
   try {
     finish();
@@ -171,7 +221,7 @@ BagSink::~BagSink() {
 
 void BagSink::started(const std::vector<RunSpec>& block) {
   std::vector<Item> items;
-  for (const RunSpec& r : block) items.push_back({r.id, Open{r.name, run_info(model_, r)}});
+  for (const RunSpec& r : block) items.push_back({r.id, Open{r.name, info(r)}});
   push(std::move(items));
 }
 

@@ -33,6 +33,7 @@ struct ManifestRun {
   RunKind kind = RunKind::Stochastic;
   double mu = 0;
   std::uint32_t realization = 0;
+  std::size_t point = 0;  // format 2; for format 1 set from mu once all manifests are read
 };
 
 struct Manifest {
@@ -41,6 +42,11 @@ struct Manifest {
   std::string config_key;
   int shard_index = 0, shard_count = 1;
   std::vector<ManifestRun> runs;
+  bool study = false;                       // format 2 (doc/batch-folder.md §3)
+  std::vector<std::string> axes;            // format 2: the swept keys
+  std::vector<std::vector<double>> points;  // format 2: each point's value on every axis
+  std::vector<std::string> point_keys;      // format 2: config_key of each point
+  std::string grid;                         // format 2: axes and points as text, to compare manifests
 };
 
 // Why a bag is not used.
@@ -85,13 +91,35 @@ Manifest parse_manifest(const fs::path& path) {
   try {
     if (!root.IsMap()) fail("not a YAML map");
     const std::string format = root["format"] ? root["format"].as<std::string>() : "(missing)";
-    if (format != kManifestFormat) fail("format is '" + format + "', expected '" + kManifestFormat + "'");
+    if (format != kManifestFormat && format != kManifestFormatStudy)
+      fail("format is '" + format + "', expected '" + kManifestFormat + "' or '" + kManifestFormatStudy + "'");
+    m.study = format == kManifestFormatStudy;
     try {
       m.config = parse_config(root["config"]);
     } catch (const ConfigError& ex) {
       fail(std::string("its config is not a valid model configuration: ") + ex.what());
     }
     m.config_key = config_key(m.config);
+    if (m.study) {
+      m.axes = root["axes"].as<std::vector<std::string>>();
+      if (m.axes.empty() || m.axes.front() != kFrictionKey) fail("axes must start with " + std::string(kFrictionKey));
+      const YAML::Node points = root["points"];
+      if (!points || !points.IsSequence()) fail("points must be a list");
+      for (std::size_t i = 0; i < points.size(); ++i) {
+        if (points[i]["point"].as<std::size_t>() != i) fail("points[" + std::to_string(i) + "].point must be " + std::to_string(i));
+        const auto values = points[i]["values"].as<std::vector<double>>();
+        if (values.size() != m.axes.size()) fail("points[" + std::to_string(i) + "] needs one value per axis");
+        try {
+          m.point_keys.push_back(config_key(apply_point(m.config, m.axes, values)));
+        } catch (const ConfigError& ex) {
+          fail("points[" + std::to_string(i) + "] is not a valid configuration: " + ex.what());
+        }
+        m.points.push_back(values);
+      }
+      YAML::Emitter e;
+      e << YAML::Flow << m.axes << m.points;
+      m.grid = e.c_str();
+    }
     m.shard_index = root["shard_index"].as<int>();
     m.shard_count = root["shard_count"].as<int>();
     if (m.shard_count < 1 || m.shard_index < 0 || m.shard_index >= m.shard_count)
@@ -106,6 +134,11 @@ Manifest parse_manifest(const fs::path& path) {
       e.file = r["file"].as<std::string>();
       e.mu = r["mu"].as<double>();
       e.realization = r["realization"].as<std::uint32_t>();
+      if (m.study) {
+        e.point = r["point"].as<std::size_t>();
+        if (e.point >= m.points.size()) fail("runs[" + std::to_string(i) + "].point is not among the points");
+        if (!same(m.points[e.point][0], e.mu)) fail("runs[" + std::to_string(i) + "].mu differs from its point's");
+      }
       const auto kind = run_kind_from(r["kind"].as<std::string>());
       if (!kind) fail("runs[" + std::to_string(i) + "].kind = '" + r["kind"].as<std::string>() + "' is not S1, phase or stochastic");
       e.kind = *kind;
@@ -331,13 +364,25 @@ RunRecord check_run(const BagRead& read, const ManifestRun& e, const Manifest& m
   require(info->seed == c.seed, "run_info seed " + std::to_string(info->seed) + " differs from the batch's " +
                                     std::to_string(c.seed) + " (a bag of another batch)");
   std::string key;
+  YAML::Node parameters;
   try {
-    key = config_key(parse_config(YAML::Load(info->parameters_yaml)));
+    parameters = YAML::Load(info->parameters_yaml);
+    key = config_key(parse_config(parameters));
   } catch (const std::exception& ex) {
     throw Skip(std::string("run_info parameters_yaml is not a valid configuration: ") + ex.what());
   }
-  require(key == manifest.config_key, "run_info configuration differs from the manifest's at " +
-                                          first_difference(manifest.config_key, key) + " (a bag of another batch)");
+  const std::string& expected = manifest.study ? manifest.point_keys.at(e.point) : manifest.config_key;
+  require(key == expected, "run_info configuration differs from the manifest's at " + first_difference(expected, key) +
+                               " (a bag of another batch)");
+  if (manifest.study) {
+    std::size_t point = ~std::size_t{0};
+    try {
+      point = parameters["study"]["point"].as<std::size_t>();
+    } catch (const YAML::Exception&) {
+    }
+    require(point == e.point, "run_info study.point differs from the manifest's point " + std::to_string(e.point) +
+                                  " (a bag of another batch)");
+  }
   require(same(info->time_step, c.run.time_step) && same(info->duration, c.run.duration),
           "run_info time_step/duration differ from the manifest's (a bag of another batch)");
   require(summary->run_name == e.name && summary->kind == to_string(e.kind) && summary->realization == e.realization &&
@@ -357,6 +402,7 @@ RunRecord check_run(const BagRead& read, const ManifestRun& e, const Manifest& m
   r.kind = e.kind;
   r.mu = e.mu;
   r.index = e.realization;
+  r.point = e.point;
   r.center_distance = summary->center_distance;
   r.steady_state_time = summary->steady_state_time;
   r.steady_state_time_fine = summary->steady_state_time_fine;
@@ -396,6 +442,9 @@ BatchInputs read_batches(const std::vector<std::string>& folder_args, const Read
     for (const fs::path& p : paths) manifests.push_back(parse_manifest(p));
   }
   for (const Manifest& m : manifests) {
+    if (m.study != manifests.front().study || m.grid != manifests.front().grid)
+      throw BatchReadError("manifests " + manifests.front().path.string() + " and " + m.path.string() +
+                           " belong to different batches: their formats or study grids differ");
     if (m.config_key != manifests.front().config_key)
       throw BatchReadError("manifests " + manifests.front().path.string() + " and " + m.path.string() +
                            " belong to different batches: their configurations differ at " +
@@ -404,13 +453,29 @@ BatchInputs read_batches(const std::vector<std::string>& folder_args, const Read
     for (const ManifestRun& e : m.runs) {
       const auto [it, inserted] = listed.emplace(e.name, std::make_pair(e, &m));
       const ManifestRun& had = it->second.first;
-      if (!inserted && (had.kind != e.kind || had.realization != e.realization || !same(had.mu, e.mu)))
+      if (!inserted && (had.kind != e.kind || had.realization != e.realization || !same(had.mu, e.mu) || had.point != e.point))
         throw BatchReadError("run " + e.name + " is listed differently in " + it->second.second->path.string() +
                              " and " + m.path.string());
     }
   }
   in.config = manifests.front().config;
   in.expected_runs = listed.size();
+  if (manifests.front().study) {
+    for (std::size_t a = 0; a < manifests.front().axes.size(); ++a) {
+      SweepAxis axis{manifests.front().axes[a], {}};
+      for (const auto& p : manifests.front().points)
+        if (std::find(axis.values.begin(), axis.values.end(), p[a]) == axis.values.end()) axis.values.push_back(p[a]);
+      in.axes.push_back(axis);
+    }
+    in.points = manifests.front().points;
+  } else {  // format 1, a mu sweep: one point per mu, ascending (as its report)
+    std::set<double> mus;
+    for (const auto& [name, entry] : listed) mus.insert(entry.first.mu);
+    in.axes.push_back({kFrictionKey, std::vector<double>(mus.begin(), mus.end())});
+    for (double mu : mus) in.points.push_back({mu});
+    for (auto& [name, entry] : listed)
+      entry.first.point = static_cast<std::size_t>(std::distance(mus.begin(), mus.find(entry.first.mu)));
+  }
   for (const auto& [count, seen] : shards)
     for (int i = 0; i < count; ++i)
       if (!seen.count(i)) {

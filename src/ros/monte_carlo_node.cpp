@@ -42,8 +42,9 @@ bool MonteCarloNode::init() {
   try {
     model_ = load_model_config(pnh_);
     settings_ = parse_batch_settings(yaml_from_parameters(pnh_, {"monte_carlo"})["monte_carlo"], model_);
-    runs_ = shard_runs(plan_runs(model_, settings_), settings_.shard_index, settings_.shard_count);
-    todo_ = prepare_folder(model_, settings_, runs_);
+    study_ = make_study(model_, settings_);  // every point validated before anything runs
+    runs_ = shard_runs(plan_runs(study_, settings_), settings_.shard_index, settings_.shard_count);
+    todo_ = prepare_folder(study_, settings_, runs_);
   } catch (const std::exception& e) {
     ROS_FATAL("gear_monte_carlo: %s", e.what());
     return false;
@@ -55,21 +56,22 @@ bool MonteCarloNode::init() {
 int MonteCarloNode::run() {
   const double steps = static_cast<double>(model_.run.steps());
   ROS_INFO("gear_monte_carlo: shard %d of %d into '%s': %zu runs, %zu complete, %zu to do "
-           "(%zu mu, S1%s, %u realizations; T = %g s, h = %g s; %d threads, %d lanes per block)",
+           "(%zu points: %zu mu%s; S1%s, %u realizations; T = %g s, h = %g s; %d threads, %d lanes per block)",
            settings_.shard_index, settings_.shard_count, settings_.output_dir.c_str(), runs_.size(),
-           runs_.size() - todo_.size(), todo_.size(), settings_.mu.size(),
+           runs_.size() - todo_.size(), todo_.size(), study_.points.size(), settings_.mu.size(),
+           settings_.sweep.empty() ? "" : (" x " + std::to_string(settings_.sweep.size()) + " swept keys").c_str(),
            settings_.phase_ensemble ? " + 64 phases" : "", settings_.realizations, model_.run.duration,
            model_.run.time_step, batch_threads(settings_), settings_.block_lanes);
   total_steps_ = static_cast<std::int64_t>(todo_.size()) * static_cast<std::int64_t>(steps);
   start_ = std::chrono::steady_clock::now();
-  write_manifest(model_, settings_, runs_, todo_.empty());
+  write_manifest(study_, settings_, runs_, todo_.empty());
 
-  BagSink sink(model_, settings_.output_dir);
+  BagSink sink(study_, settings_.output_dir);
   publish(sink, false);  // the totals at once, for rostopic echo
   std::thread monitor([&] { watch(sink); });
   std::string failure;
   try {
-    run_batch(model_, todo_, settings_, sink, control_);
+    run_batch(study_, todo_, settings_, sink, control_);
   } catch (const std::exception& e) {
     failure = e.what();
   }
@@ -87,7 +89,7 @@ int MonteCarloNode::run() {
 
   const bool complete = sink.bags_written() == todo_.size();
   try {
-    write_manifest(model_, settings_, runs_, complete);
+    write_manifest(study_, settings_, runs_, complete);
   } catch (const std::exception& e) {
     if (failure.empty()) failure = e.what();
   }

@@ -15,6 +15,7 @@
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/config/parameters.hpp"
 #include "gear_dynamics/config/simulator_settings.hpp"
+#include "gear_dynamics/config/sweep.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
 #include "gear_dynamics/engine/simulation.hpp"
 
@@ -40,6 +41,10 @@ Runs the deterministic run S1 and stochastic realizations of the spur-gear model
                       (simulate.launch runs this while it is parsed, so a bad value ends roslaunch
                       with a non-zero exit code before any node starts)
   --record-dir DIR    with --check-simulator: DIR must be an existing writable folder (record:=true)
+  --sweep KEY=V1,V2,...  run every point of a grid (repeatable: the product), e.g.
+                      --sweep load.sigma=0,2.5,5 or --sweep load.initial_mean=1:100:3:log
+                      (from:to:count[:log]); KEY is any scalar gear_pair/load key (doc/studies.md).
+                      Run names get the point, p0001_S1; a summary line per run and point.
 The defaults come from the package's config/ folder: $GEAR_DYNAMICS_CONFIG_DIR if set, else the
 installed share/gear_dynamics/config, else gear_dynamics/config on $ROS_PACKAGE_PATH.
 Snapshot times after run.duration are dropped with a notice (a short --set run.duration run).
@@ -58,6 +63,7 @@ struct Options {
   std::string output = "gear_run.csv";
   bool check_simulator = false;
   std::string record_dir;
+  std::vector<std::string> sweeps;
 };
 
 // The Markdown table of one section, as the docs carry it.
@@ -92,6 +98,7 @@ Options parse(int argc, char** argv) {
     else if (a == "--print-parameters") { print_parameters(value()); std::exit(0); }
     else if (a == "--check-simulator") o.check_simulator = true;
     else if (a == "--record-dir") o.record_dir = value();
+    else if (a == "--sweep") o.sweeps.push_back(value());
     else if (a == "-h" || a == "--help") { std::cout << kUsage; std::exit(0); }
     else throw std::runtime_error("unknown option '" + a + "'\n" + kUsage);
   }
@@ -168,7 +175,6 @@ int main(int argc, char** argv) try {
   if (opt.mu >= 0) root["gear_pair"]["friction_coefficient"] = opt.mu;
   if (opt.seed >= 0) root["run"]["seed"] = opt.seed;
   if (opt.check_simulator) {
-    std::vector<std::string> problems;
     try {
       const gd::ModelConfig model = gd::parse_config(root);
       gd::parse_simulator_settings(root, model.run.time_step);
@@ -187,19 +193,10 @@ int main(int argc, char** argv) try {
   drop_late_snapshots(root);
   const gd::ModelConfig cfg = gd::parse_config(root);
 
-  std::vector<gd::LaneSpec> lanes;
-  std::vector<std::string> names;
-  if (opt.deterministic) {
-    lanes.push_back(gd::deterministic_lane(cfg, cfg.friction_coefficient));
-    names.push_back("S1");
-  }
-  for (int r = 0; r < opt.realizations; ++r) {
-    lanes.push_back(gd::stochastic_lane(cfg, cfg.friction_coefficient, static_cast<std::uint64_t>(r)));
-    names.push_back("r" + std::to_string(r));
-  }
-  if (lanes.empty()) throw std::runtime_error("nothing to run: --no-deterministic with --realizations 0");
-
-  gd::Ensemble ensemble(gd::derive(cfg.gear), cfg.run.time_step, cfg.initial, lanes, cfg.seed);
+  // The grid of --sweep (one point without it): every point validated before anything runs.
+  std::vector<gd::SweepAxis> axes;
+  for (const auto& text : opt.sweeps) axes.push_back(gd::parse_sweep_argument(text));
+  const gd::Study study = gd::make_study(cfg, {cfg.friction_coefficient}, axes);
 
   std::ofstream file;
   std::ostream* csv = nullptr;
@@ -214,29 +211,52 @@ int main(int argc, char** argv) try {
     csv->precision(17);
     *csv << "run,t,delta,delta_dot,phi,center_distance\n";
   }
-  gd::Recorder recorder;
-  if (csv) {
-    recorder.every = std::max<std::int64_t>(1, std::llround(1.0 / (opt.rate * cfg.run.time_step)));
-    recorder.record = [&](const gd::Ensemble& e, const Eigen::ArrayXd& d) {
-      for (int i = 0; i < e.lanes(); ++i)
-        *csv << names[i] << ',' << gd::grid_time(e.step_index(), e.time_step()) << ',' << e.delta()[i] << ',' << e.velocity()[i] << ','
-             << e.load()[i] << ',' << d[i] << '\n';
-    };
-  }
+  for (const gd::StudyPoint& point : study.points) {
+    const gd::ModelConfig& pc = point.config;
+    std::string prefix;
+    if (!opt.sweeps.empty()) {
+      char buf[16];
+      std::snprintf(buf, sizeof buf, "p%04zu_", point.index);
+      prefix = buf;
+      std::printf("# point %zu: %s\n", point.index, gd::point_text(study.keys(), point.values).c_str());
+    }
+    std::vector<gd::LaneSpec> lanes;
+    std::vector<std::string> names;
+    if (opt.deterministic) {
+      lanes.push_back(gd::deterministic_lane(pc, pc.friction_coefficient));
+      names.push_back(prefix + "S1");
+    }
+    for (int r = 0; r < opt.realizations; ++r) {
+      lanes.push_back(gd::stochastic_lane(pc, pc.friction_coefficient, static_cast<std::uint64_t>(r)));
+      names.push_back(prefix + "r" + std::to_string(r));
+    }
+    if (lanes.empty()) throw std::runtime_error("nothing to run: --no-deterministic with --realizations 0");
 
-  const auto start = std::chrono::steady_clock::now();
-  const auto results = gd::simulate(ensemble, cfg.run, recorder);
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    gd::Ensemble ensemble(gd::derive(pc.gear), pc.run.time_step, pc.initial, lanes, pc.seed);
+    gd::Recorder recorder;
+    if (csv) {
+      recorder.every = std::max<std::int64_t>(1, std::llround(1.0 / (opt.rate * pc.run.time_step)));
+      recorder.record = [&](const gd::Ensemble& e, const Eigen::ArrayXd& d) {
+        for (int i = 0; i < e.lanes(); ++i)
+          *csv << names[i] << ',' << gd::grid_time(e.step_index(), e.time_step()) << ',' << e.delta()[i] << ',' << e.velocity()[i] << ','
+               << e.load()[i] << ',' << d[i] << '\n';
+      };
+    }
 
-  std::printf("# mu %.4g, seed %llu, h %g s, T %g s, window %g s, %zu runs in %.3f s wall\n",
-              cfg.friction_coefficient, static_cast<unsigned long long>(cfg.seed), cfg.run.time_step,
-              cfg.run.duration, cfg.run.window, results.size(), wall);
-  for (std::size_t i = 0; i < results.size(); ++i) {
-    const auto& r = results[i];
-    std::printf("%s: d = %.6f mm s^-1/2, t_ss = %.6f s (%s), delta(T) = %.6f mm, delta_dot(T) = %.4f mm/s, Phi(T) = %.3f mm/s^2\n",
-                names[i].c_str(), 1e3 * r.center_distance, r.steady_state_time,
-                r.reached_steady_state ? "steady" : "not steady", 1e3 * r.final_delta,
-                1e3 * r.final_delta_dot, 1e3 * r.final_load);
+    const auto start = std::chrono::steady_clock::now();
+    const auto results = gd::simulate(ensemble, pc.run, recorder);
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+    std::printf("# mu %.4g, seed %llu, h %g s, T %g s, window %g s, %zu runs in %.3f s wall\n",
+                pc.friction_coefficient, static_cast<unsigned long long>(pc.seed), pc.run.time_step,
+                pc.run.duration, pc.run.window, results.size(), wall);
+    for (std::size_t i = 0; i < results.size(); ++i) {
+      const auto& r = results[i];
+      std::printf("%s: d = %.6f mm s^-1/2, t_ss = %.6f s (%s), delta(T) = %.6f mm, delta_dot(T) = %.4f mm/s, Phi(T) = %.3f mm/s^2\n",
+                  names[i].c_str(), 1e3 * r.center_distance, r.steady_state_time,
+                  r.reached_steady_state ? "steady" : "not steady", 1e3 * r.final_delta,
+                  1e3 * r.final_delta_dot, 1e3 * r.final_load);
+    }
   }
   return 0;
 } catch (const std::exception& e) {

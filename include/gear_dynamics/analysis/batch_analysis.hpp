@@ -22,6 +22,7 @@ struct RunRecord {
   RunKind kind = RunKind::Stochastic;
   double mu = 0;
   std::uint32_t index = 0;  // realization (stochastic) or phase index j (phase)
+  std::size_t point = 0;    // study point (BatchInputs::points); for a mu sweep, mu's rank
   double center_distance = 0;         // d over the window [m s^-1/2]
   double steady_state_time = 0;       // t_ss [s]
   double steady_state_time_fine = 0;  // t_ss at the finer threshold [s]
@@ -55,7 +56,14 @@ struct BatchAnalysis {
   // independent; the batch uses common random numbers (realization r shares its load path across
   // mu), so Friedman's test, blocked by realization, is the one that matches the design.
   RankTest kruskal_wallis, friedman;
+  // How the CSV rows are keyed: empty for the mu sweep (a column `mu`); for a study with more axes
+  // "point,mu,<key>..." and one such text per entry of `mu` (analyse_batch, study_analysis.hpp).
+  std::string key_header;
+  std::vector<std::string> keys;
 };
+
+// The statistics of one group of runs (one mu, or one study point); `mu` labels it.
+MuAnalysis analyse_group(double mu, const std::vector<const RunRecord*>& runs, const AnalysisSettings& settings);
 
 // Groups the records by mu (exact value, as written by the batch) and computes everything.
 // Throws std::invalid_argument if a joint time is not among a stochastic run's snapshot times.

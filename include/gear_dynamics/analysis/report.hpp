@@ -8,6 +8,7 @@
 
 #include "gear_dynamics/analysis/batch_analysis.hpp"
 #include "gear_dynamics/config/config.hpp"
+#include "gear_dynamics/config/sweep.hpp"
 
 namespace gear_dynamics {
 
@@ -28,6 +29,10 @@ struct BatchInputs {
   std::vector<RunRecord> runs;        // one per usable bag
   std::vector<SkippedFile> skipped;   // bags left out, with the reason
   std::vector<std::string> missing;   // listed runs without a usable bag (or notes on missing shards)
+  // The study grid: axis 0 is gear_pair.friction_coefficient; points[i] holds point i's value on
+  // every axis (RunRecord::point). A format-1 folder is the mu sweep: one point per mu, ascending.
+  std::vector<SweepAxis> axes;
+  std::vector<std::vector<double>> points;
 };
 
 // The paper's published numbers (Tables 3 and 4, §3.2.3), in its units, looked up by mu.
@@ -42,7 +47,10 @@ constexpr double kPaperMuExceeds = 0.04;
 
 // Writes report.md and the CSV files into `folder` (created if needed). Throws std::runtime_error
 // if a file cannot be written. The names of the files written are returned.
+// With `study` (analyse_batch), also points.csv and axis_tests.csv; a study with more axes than mu
+// gets its report.md organised by axis (study_analysis.hpp) instead of the paper's tables.
+struct StudyAnalysis;
 std::vector<std::string> write_report(const std::string& folder, const BatchInputs& inputs,
-                                      const BatchAnalysis& analysis);
+                                      const BatchAnalysis& analysis, const StudyAnalysis* study = nullptr);
 
 }  // namespace gear_dynamics

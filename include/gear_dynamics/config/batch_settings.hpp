@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "gear_dynamics/config/config.hpp"
+#include "gear_dynamics/config/sweep.hpp"
 
 namespace gear_dynamics {
 
@@ -19,6 +20,7 @@ struct BatchSettings {
   double record_rate = 1.0e5;           // [Hz] series of S1 and realizations < record_realizations
   std::uint32_t record_realizations = 2;  // S2 = realization 0, S3 = realization 1
   double sparse_record_rate = 100.0;    // [Hz] series of every other run; 0 = none
+  std::vector<SweepAxis> sweep;         // further axes beside mu (config/sweep.hpp); empty: the mu sweep
   // How it runs: no effect on any bag's content.
   std::string output_dir = "batch";
   bool overwrite = false;               // replace a folder that holds another batch

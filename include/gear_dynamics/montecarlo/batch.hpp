@@ -30,9 +30,17 @@ struct RunSpec {
   std::uint32_t index = 0;      // realization r, phase member j, 0 for S1
   double mesh_phase = 0.0;      // phi0 [rad]
   std::int64_t record_every = 0;  // grid steps between recorded states; 0 = no series
+  std::size_t point = 0;        // the study point (config/sweep.hpp); for the mu sweep, mu's position
+  std::size_t schedule = 0;     // runs of one schedule may share an Ensemble (StudyPoint::schedule)
 };
 
+// The study of a batch: settings.mu x settings.sweep, every point validated (throws ConfigError).
+Study make_study(const ModelConfig& model, const BatchSettings& settings);
+
 // Every run of the batch: for each mu, S1, the phase ensemble (if on), realizations 0..R-1.
+// For a study with more than the friction axis, names are p<iiii>_mu<μ>_..., point i first;
+// otherwise as for the mu sweep (doc/batch-folder.md §4).
+std::vector<RunSpec> plan_runs(const Study& study, const BatchSettings& settings);
 std::vector<RunSpec> plan_runs(const ModelConfig& model, const BatchSettings& settings);
 // Runs i with i % count == index: shards are disjoint, their union is the batch, and each gets
 // a like share of every kind and mu.
@@ -40,8 +48,11 @@ std::vector<RunSpec> shard_runs(const std::vector<RunSpec>& runs, int index, int
 // The model configuration of one run (its mu and phi0), and its lane.
 ModelConfig run_config(const ModelConfig& model, const RunSpec& run);
 LaneSpec run_lane(const ModelConfig& model, const RunSpec& run);
+// The same from the run's study point.
+ModelConfig run_config(const Study& study, const RunSpec& run);
+LaneSpec run_lane(const Study& study, const RunSpec& run);
 
-// Groups of at most `lanes` runs that share phi0 and record interval, in the order given.
+// Groups of at most `lanes` runs that share schedule, phi0 and record interval, in the order given.
 std::vector<std::vector<RunSpec>> make_blocks(const std::vector<RunSpec>& runs, int lanes);
 
 // Receives what a batch produces. Calls for one block come from one thread, in order (started,
@@ -71,6 +82,9 @@ int batch_threads(const BatchSettings& settings);
 // blocks first (their output takes longest to write). After `stop`, blocks
 // that record are abandoned at their next recorded step; blocks without a series finish.
 // Rethrows the first error (e.g. DivergenceError) after the blocks in flight have ended.
+void run_batch(const Study& study, const std::vector<RunSpec>& runs,
+               const BatchSettings& settings, BatchSink& sink, BatchControl& control);
+// The same for the study of (model, settings).
 void run_batch(const ModelConfig& model, const std::vector<RunSpec>& runs,
                const BatchSettings& settings, BatchSink& sink, BatchControl& control);
 

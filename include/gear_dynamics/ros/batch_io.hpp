@@ -11,6 +11,7 @@
 #include <exception>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <unordered_map>
@@ -30,8 +31,14 @@ namespace gear_dynamics {
 // batch's content. Two batches are the same batch if these are equal.
 YAML::Node batch_config_yaml(const ModelConfig& model, const BatchSettings& settings);
 
-// The RunInfo a run's bag starts with.
+// The RunInfo a run's bag starts with. For a study with more than the friction axis its
+// parameters_yaml also holds `study: {point: i, values: {key: value, ...}}` (doc/batch-folder.md §6.1).
 RunInfo run_info(const ModelConfig& model, const RunSpec& run);
+RunInfo run_info(const Study& study, const RunSpec& run);
+
+// The manifest format a study writes: gear_dynamics_batch/1 for the mu sweep (as before studies),
+// gear_dynamics_batch/2 when it has further axes (doc/batch-folder.md §3).
+const char* manifest_format(const Study& study);
 
 // True if `path` is a complete bag of `expected`'s run: readable index, exactly one run_info equal
 // to `expected`, exactly one summary.
@@ -44,6 +51,8 @@ bool bag_complete(const std::string& path, const RunInfo& expected);
 // manifests.
 std::vector<RunSpec> prepare_folder(const ModelConfig& model, const BatchSettings& settings,
                                     const std::vector<RunSpec>& runs);
+std::vector<RunSpec> prepare_folder(const Study& study, const BatchSettings& settings,
+                                    const std::vector<RunSpec>& runs);
 
 // manifest.yaml, or manifest_shard<i>of<n>.yaml for shard i of n > 1 (shards may share a folder).
 std::string manifest_file(const BatchSettings& settings);
@@ -51,12 +60,16 @@ std::string manifest_file(const BatchSettings& settings);
 // Writes the manifest into settings.output_dir atomically (temporary file, then rename).
 void write_manifest(const ModelConfig& model, const BatchSettings& settings,
                     const std::vector<RunSpec>& runs, bool complete);
+void write_manifest(const Study& study, const BatchSettings& settings,
+                    const std::vector<RunSpec>& runs, bool complete);
 
 // Writes the bags on a thread of its own, fed through a bounded queue: bag writing overlaps with
 // stepping, and memory stays bounded (the queue, plus one open bag per lane in flight).
 class BagSink : public BatchSink {
  public:
   BagSink(const ModelConfig& model, std::string folder, std::size_t queue_capacity = 1 << 15);
+  // Runs of a study: RunInfo from each run's point.
+  BagSink(const Study& study, std::string folder, std::size_t queue_capacity = 1 << 15);
   ~BagSink() override;
 
   void started(const std::vector<RunSpec>& block) override;
@@ -91,7 +104,10 @@ class BagSink : public BatchSink {
   void write(Item& item);
   void write_bag(Item& item);
 
+  RunInfo info(const RunSpec& run) const;
+
   ModelConfig model_;
+  std::optional<Study> study_;
   std::string folder_;
   std::size_t capacity_;
 

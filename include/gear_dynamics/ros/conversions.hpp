@@ -36,6 +36,9 @@ constexpr const char* kRunInfoTopic = "/gear/run_info";
 constexpr const char* kStateTopic = "/gear/state";
 constexpr const char* kSummaryTopic = "/gear/summary";
 constexpr const char* kManifestFormat = "gear_dynamics_batch/1";
+// A study with more axes than mu (config/sweep.hpp): points, a point per run, names p<iiii>_...
+// Readers of format 1 refuse it rather than pool its points by mu.
+constexpr const char* kManifestFormatStudy = "gear_dynamics_batch/2";
 
 RunInfo make_run_info(const ModelConfig& config, RunKind kind, std::uint32_t realization,
                       double mu, double sigma, double duration);

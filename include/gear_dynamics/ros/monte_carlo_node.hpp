@@ -43,6 +43,7 @@ class MonteCarloNode {
   ros::NodeHandle& pnh_;
   ros::Publisher progress_pub_;
   ModelConfig model_;
+  Study study_;  // the points of the batch (one per mu without a sweep)
   BatchSettings settings_;
   std::vector<RunSpec> runs_, todo_;
   BatchControl control_;

@@ -1,0 +1,319 @@
+#include "gear_dynamics/analysis/study_analysis.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <stdexcept>
+
+namespace gear_dynamics {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr double U = kToPaperUnits;
+
+std::string g(double x) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.10g", x);
+  return buf;
+}
+
+std::string fixed(double x, int decimals) {
+  if (std::isnan(x)) return "–";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, x);
+  return buf;
+}
+
+std::string short_value(double x) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.6g", x);
+  return buf;
+}
+
+std::string percent(const Proportion& p) {
+  if (p.trials == 0) return "–";
+  return fixed(100 * p.estimate, 1) + " [" + fixed(100 * p.low, 1) + ", " + fixed(100 * p.high, 1) + "]";
+}
+
+std::string median_ci(const BoxStats& b, double scale, int decimals) {
+  if (b.n == 0) return "–";
+  return fixed(b.median * scale, decimals) + " [" + fixed(b.median_low * scale, decimals) + ", " +
+         fixed(b.median_high * scale, decimals) + "]";
+}
+
+std::string p_text(const RankTest& t) {
+  if (!t.valid) return "not defined";
+  if (t.p_value < 1e-4) return "< 1e-4";
+  return fixed(t.p_value, 4);
+}
+
+// "load.sigma = 5, gear_pair.friction_coefficient = 0.04" for the fixed axes of a slice.
+std::string fixed_text(const StudyAnalysis& s, const AxisSlice& l, const char* sep, const char* eq) {
+  std::string t;
+  for (std::size_t a = 0; a < s.axes.size(); ++a) {
+    if (a == l.axis || s.axes[a].values.size() < 2) continue;
+    t += (t.empty() ? "" : sep) + column_name(s.axes[a].key) + eq + short_value(l.fixed[a]);
+  }
+  return t;
+}
+
+void proportion_fields(std::ofstream& o, const Proportion& p) {
+  o << ',' << p.successes << ',' << p.trials << ',' << g(p.estimate) << ',' << g(p.low) << ',' << g(p.high);
+}
+
+}  // namespace
+
+StudyAnalysis analyse_study(const BatchInputs& in, const AnalysisSettings& settings) {
+  StudyAnalysis out;
+  out.axes = in.axes;
+  std::vector<std::vector<const RunRecord*>> by_point(in.points.size());
+  for (const RunRecord& r : in.runs)
+    if (r.point < by_point.size()) by_point[r.point].push_back(&r);
+  for (std::size_t p = 0; p < in.points.size(); ++p) {
+    PointAnalysis a;
+    a.point = p;
+    a.values = in.points[p];
+    a.stats = analyse_group(a.values.at(0), by_point[p], settings);
+    std::size_t both = 0, n = 0;
+    double sum = 0, sum2 = 0;
+    for (const RunRecord* r : by_point[p]) {
+      if (r->kind != RunKind::Stochastic) continue;
+      ++n;
+      both += settings.delta_interval.contains(r->final_delta) && settings.delta_dot_interval.contains(r->final_delta_dot);
+      sum += r->final_phi;
+    }
+    a.both_in_interval = wilson(both, n, settings.confidence);
+    a.final_phi_mean = n ? sum / static_cast<double>(n) : std::nan("");
+    for (const RunRecord* r : by_point[p])
+      if (r->kind == RunKind::Stochastic) sum2 += (r->final_phi - a.final_phi_mean) * (r->final_phi - a.final_phi_mean);
+    a.final_phi_sd = n > 1 ? std::sqrt(sum2 / static_cast<double>(n - 1)) : std::nan("");
+    out.points.push_back(std::move(a));
+  }
+
+  // d of each stochastic realization at each point, for the tests.
+  std::vector<std::map<std::uint32_t, double>> d(in.points.size());
+  for (const RunRecord& r : in.runs)
+    if (r.kind == RunKind::Stochastic && r.point < d.size()) d[r.point][r.index] = r.center_distance;
+
+  // Lines of the grid: for each axis with > 1 value, points grouped by the values of the others.
+  for (std::size_t axis = 0; axis < out.axes.size(); ++axis) {
+    const std::vector<double>& values = out.axes[axis].values;
+    if (values.size() < 2) continue;
+    std::map<std::vector<double>, std::vector<std::size_t>> lines;
+    std::vector<std::vector<double>> order;  // lines in the order of their first point
+    for (std::size_t p = 0; p < in.points.size(); ++p) {
+      std::vector<double> others = in.points[p];
+      others[axis] = std::nan("");
+      std::vector<double> k = others;
+      k[axis] = 0;  // NaN never compares equal
+      auto [it, inserted] = lines.emplace(k, std::vector<std::size_t>{});
+      if (inserted) order.push_back(k);
+      it->second.push_back(p);
+    }
+    for (const auto& k : order) {
+      AxisSlice line;
+      line.axis = axis;
+      line.points = lines[k];
+      const auto rank = [&](std::size_t p) {
+        return std::find(values.begin(), values.end(), in.points[p][axis]) - values.begin();
+      };
+      std::stable_sort(line.points.begin(), line.points.end(), [&](std::size_t x, std::size_t y) { return rank(x) < rank(y); });
+      line.fixed = k;
+      line.fixed[axis] = std::nan("");
+      std::vector<std::vector<double>> groups;
+      for (std::size_t p : line.points) {
+        groups.emplace_back();
+        for (const auto& [r, x] : d[p]) groups.back().push_back(x);
+      }
+      line.kruskal_wallis = kruskal_wallis(groups);
+      std::vector<std::vector<double>> blocks;  // realizations present at every point of the line
+      for (const auto& [r, x] : d[line.points.front()]) {
+        std::vector<double> row;
+        for (std::size_t p : line.points) {
+          const auto it = d[p].find(r);
+          if (it == d[p].end()) break;
+          row.push_back(it->second);
+        }
+        if (row.size() == line.points.size()) blocks.push_back(row);
+      }
+      line.friedman = friedman(blocks);
+      out.slices.push_back(std::move(line));
+    }
+  }
+  return out;
+}
+
+BatchAnalysis analyse_batch(const BatchInputs& in, const AnalysisSettings& settings, StudyAnalysis& study) {
+  study = analyse_study(in, settings);
+  if (!study.swept()) return analyse(in.runs, settings);
+  BatchAnalysis out;
+  out.settings = settings;
+  out.key_header = "point";
+  for (const SweepAxis& a : study.axes) out.key_header += "," + column_name(a.key);
+  std::vector<std::vector<double>> groups;
+  std::map<std::uint32_t, std::vector<double>> rows;
+  for (const PointAnalysis& p : study.points) {
+    out.mu.push_back(p.stats);
+    std::string k = std::to_string(p.point);
+    for (double v : p.values) k += "," + g(v);
+    out.keys.push_back(k);
+    groups.emplace_back();
+  }
+  for (const RunRecord& r : in.runs)
+    if (r.kind == RunKind::Stochastic && r.point < groups.size()) {
+      groups[r.point].push_back(r.center_distance);
+      rows[r.index].resize(groups.size(), std::nan(""));
+      rows[r.index][r.point] = r.center_distance;
+    }
+  out.kruskal_wallis = kruskal_wallis(groups);
+  std::vector<std::vector<double>> blocks;
+  for (const auto& [r, row] : rows)
+    if (std::none_of(row.begin(), row.end(), [](double x) { return std::isnan(x); })) blocks.push_back(row);
+  out.friedman = friedman(blocks);
+  return out;
+}
+
+void write_study_files(const std::string& folder, const BatchInputs& in, const StudyAnalysis& st,
+                       const AnalysisSettings& s, std::vector<std::string>& written) {
+  const fs::path dir(folder);
+  const auto open = [&](const std::string& name) {
+    const fs::path path = dir / name;
+    std::ofstream o(path);
+    if (!o) throw std::runtime_error("cannot write " + path.string());
+    written.push_back(path.string());
+    return o;
+  };
+  const auto close = [&](std::ofstream& o, const std::string& name) {
+    o.close();
+    if (!o) throw std::runtime_error("error writing " + (dir / name).string());
+  };
+  {
+    std::ofstream o = open("points.csv");
+    o << "point";
+    for (const SweepAxis& a : st.axes) o << ',' << column_name(a.key);
+    o << ",R,d_min[mm*s^-1/2],d_q1,d_median,d_median_low,d_median_high,d_q3,d_max,phase_n,phase_d_median[mm*s^-1/2],"
+         "s1_d[mm*s^-1/2]";
+    for (const char* p : {"d>median_phase_d", "d>d_S1", "delta_T_in", "delta_dot_T_in", "both_in", "t_ss<T"})
+      o << ',' << p << "_k," << p << "_n," << p << ',' << p << "_low," << p << "_high";
+    o << ",t_ss_median[s],t_ss_median_low,t_ss_median_high,t_ss_q1,t_ss_q3,delta_T_median[mm],delta_dot_T_median[mm/s],"
+         "phi_T_mean[mm/s^2],phi_T_sd[mm/s^2]\n";
+    for (const PointAnalysis& p : st.points) {
+      const MuAnalysis& m = p.stats;
+      const BoxStats& d = m.center_distance;
+      o << p.point;
+      for (double v : p.values) o << ',' << g(v);
+      o << ',' << d.n << ',' << g(d.min * U) << ',' << g(d.q1 * U) << ',' << g(d.median * U) << ',' << g(d.median_low * U)
+        << ',' << g(d.median_high * U) << ',' << g(d.q3 * U) << ',' << g(d.max * U) << ',' << m.phase_runs << ','
+        << g(m.phase_center_distance.median * U) << ',' << g(m.s1 ? m.s1->center_distance * U : std::nan(""));
+      for (const Proportion* q : {&m.d_exceeds_phase_median, &m.d_exceeds_s1, &m.delta_in_interval,
+                                  &m.delta_dot_in_interval, &p.both_in_interval, &m.reached_steady_state})
+        proportion_fields(o, *q);
+      const BoxStats& t = m.steady_state_time;
+      o << ',' << g(t.median) << ',' << g(t.median_low) << ',' << g(t.median_high) << ',' << g(t.q1) << ',' << g(t.q3)
+        << ',' << g(m.final_delta.median * U) << ',' << g(m.final_delta_dot.median * U) << ','
+        << g(p.final_phi_mean * U) << ',' << g(p.final_phi_sd * U) << '\n';
+    }
+    close(o, "points.csv");
+  }
+  {
+    std::ofstream o = open("axis_tests.csv");
+    o << "axis,fixed,points,kruskal_wallis_H,kruskal_wallis_df,kruskal_wallis_n,kruskal_wallis_p,friedman_chi2,"
+         "friedman_df,friedman_blocks,friedman_p,d_median_first[mm*s^-1/2],d_median_last[mm*s^-1/2]\n";
+    for (const AxisSlice& l : st.slices) {
+      std::string pts;
+      for (std::size_t p : l.points) pts += (pts.empty() ? "" : ";") + std::to_string(p);
+      const auto& k = l.kruskal_wallis;
+      const auto& f = l.friedman;
+      o << column_name(st.axes[l.axis].key) << ',' << fixed_text(st, l, ";", "=") << ',' << pts << ',' << g(k.statistic)
+        << ',' << k.df << ',' << k.n << ',' << g(k.p_value) << ',' << g(f.statistic) << ',' << f.df << ',' << f.n << ','
+        << g(f.p_value) << ',' << g(st.points[l.points.front()].stats.center_distance.median * U) << ','
+        << g(st.points[l.points.back()].stats.center_distance.median * U) << '\n';
+    }
+    close(o, "axis_tests.csv");
+  }
+  if (!st.swept()) return;
+
+  // ---- report.md, organised by axis ----
+  std::ofstream r = open("report.md");
+  const std::string pct = std::to_string(static_cast<int>(std::lround(100 * s.confidence))) + " %";
+  const auto interval = [](const Interval& i, int decimals) {
+    return "[" + fixed(i.lo * U, decimals) + ", " + fixed(i.hi * U, decimals) + "]";
+  };
+  r << "# gear_dynamics study report\n\nBatch folder(s): ";
+  for (std::size_t i = 0; i < in.folders.size(); ++i) r << (i ? ", " : "") << "`" << in.folders[i] << "`";
+  r << "\n\nT = " << in.config.run.duration << " s, h = " << in.config.run.time_step * 1e6 << " µs, window ["
+    << in.config.run.duration - in.config.run.window << ", " << in.config.run.duration << "] s, seed " << in.config.seed
+    << ". Runs used: " << in.runs.size() << " of " << in.expected_runs << " listed; bags skipped: " << in.skipped.size()
+    << "; runs missing: " << in.missing.size() << ".\n\n";
+  r << "The grid is the product of these axes (" << st.points.size() << " points); every point has S1, its phase "
+       "ensemble (if the batch has one) and the same stochastic realizations: realization r has the same load path "
+       "(the same normals) at every point (common random numbers).\n\n| axis | values |\n|---|---|\n";
+  for (const SweepAxis& a : st.axes) {
+    r << "| `" << a.key << "` |";
+    for (std::size_t i = 0; i < a.values.size(); ++i) r << (i ? ", " : " ") << short_value(a.values[i]);
+    r << " |\n";
+  }
+  r << "\nUnits: d in mm·s^-1/2, t_ss in s. Medians with their exact " << pct
+    << " order-statistic interval, probabilities in % with " << pct << " Wilson intervals. δ(T) ∈ "
+    << interval(s.delta_interval, 4) << " mm, δ̇(T) ∈ " << interval(s.delta_dot_interval, 1)
+    << " mm/s (closed). Every number is also in points.csv (one row per point) and axis_tests.csv (one row per line "
+       "of the grid below).\n";
+  for (std::size_t axis = 0; axis < st.axes.size(); ++axis) {
+    const std::string& key = st.axes[axis].key;
+    if (st.axes[axis].values.size() < 2) continue;
+    r << "\n## Along `" << key << "`\n";
+    for (const AxisSlice& l : st.slices) {
+      if (l.axis != axis) continue;
+      const std::string others = fixed_text(st, l, ", ", " = ");
+      const PointAnalysis &first = st.points[l.points.front()], &last = st.points[l.points.back()];
+      r << "\n### `" << key << "`" << (others.empty() ? "" : " at " + others) << "\n\n";
+      r << "Median d goes from " << median_ci(first.stats.center_distance, U, 3) << " at " << column_name(key) << " = "
+        << short_value(first.values[axis]) << " to " << median_ci(last.stats.center_distance, U, 3) << " at "
+        << short_value(last.values[axis]) << " mm·s^-1/2. Friedman's test blocked by realization (the design's common "
+        << "random numbers): χ² = " << (l.friedman.valid ? fixed(l.friedman.statistic, 2) : "–") << ", df = "
+        << l.friedman.df << ", " << l.friedman.n << " realizations, p = " << p_text(l.friedman) << "; Kruskal–Wallis: H = "
+        << (l.kruskal_wallis.valid ? fixed(l.kruskal_wallis.statistic, 2) : "–") << ", p = " << p_text(l.kruskal_wallis)
+        << ". ";
+      if (!l.friedman.valid) r << "The test is not defined here (too few realizations, or every d tied).\n\n";
+      else if (l.friedman.p_value < 1 - s.confidence)
+        r << "At the " << fixed(100 * (1 - s.confidence), 0) << " % level, `" << key << "` changes d.\n\n";
+      else r << "The data do not show that `" << key << "` changes d (p ≥ " << fixed(1 - s.confidence, 2) << ").\n\n";
+      r << "| " << column_name(key) << " | R | median d [" << pct << "] | d Q1–Q3 | phase median d | P(d > phase median) | "
+           "P(δ ∈) | P(δ̇ ∈) | P(both ∈) | t_ss median [" << pct << "] | t_ss Q1–Q3 | P(t_ss < T) |\n"
+           "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+      for (std::size_t p : l.points) {
+        const PointAnalysis& pa = st.points[p];
+        const MuAnalysis& m = pa.stats;
+        const BoxStats& d = m.center_distance;
+        const BoxStats& t = m.steady_state_time;
+        r << "| " << short_value(pa.values[axis]) << " | " << d.n << " | " << median_ci(d, U, 3) << " | "
+          << fixed(d.q1 * U, 3) << "–" << fixed(d.q3 * U, 3) << " | " << fixed(m.phase_center_distance.median * U, 3)
+          << " | " << percent(m.d_exceeds_phase_median) << " | " << percent(m.delta_in_interval) << " | "
+          << percent(m.delta_dot_in_interval) << " | " << percent(pa.both_in_interval) << " | " << median_ci(t, 1, 4)
+          << " | " << fixed(t.q1, 4) << "–" << fixed(t.q3, 4) << " | " << percent(m.reached_steady_state) << " |\n";
+      }
+    }
+  }
+  std::vector<std::size_t> varied;
+  for (std::size_t a = 0; a < st.axes.size(); ++a)
+    if (st.axes[a].values.size() > 1) varied.push_back(a);
+  r << "\n## Figures\n\n";
+  for (std::size_t a : varied)
+    r << "- `axis_" << column_name(st.axes[a].key) << ".png`: median d (with its interval), P(d > phase median) and "
+         "P(δ ∈ ∧ δ̇ ∈) along `" << st.axes[a].key << "`, one line per value of the other axes.\n";
+  if (varied.size() == 2)
+    r << "- `heatmap_d.png`, `heatmap_both_in.png`: median d and P(δ(T) ∈ ∧ δ̇(T) ∈) over the 2-D grid.\n";
+  if (!in.skipped.empty() || !in.missing.empty()) {
+    r << "\n## Left out\n\n| item | status | reason |\n|---|---|---|\n";
+    for (const SkippedFile& f : in.skipped) r << "| `" << f.file << "` | skipped | " << f.reason << " |\n";
+    for (const std::string& m : in.missing) r << "| " << m << " | missing | |\n";
+  }
+  close(r, "report.md");
+}
+
+}  // namespace gear_dynamics
