@@ -75,6 +75,9 @@ class Ensemble {
   void set_mu(int lane, double mu);
   void set_sigma(int lane, double sigma);
   void set_drift(int lane, double drift);
+  // Overwrites one lane's (delta, delta_dot) at the current step; the load and the random stream
+  // are left alone (the two-trajectory Lyapunov method, doc/nonlinear-dynamics.md §4).
+  void set_state(int lane, double delta, double velocity);
 
  private:
   void refill_normals(std::uint64_t first_index);
