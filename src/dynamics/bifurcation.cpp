@@ -56,9 +56,10 @@ namespace {
 
 void classify(ScanValue& v, const ScanOptions& o, double b, double vref) {
   v.period = detect_period(v.points, o.max_period, {o.tolerance * b, o.tolerance * vref});
-  if (v.min_gap > 0) v.regime = "no separation";
-  else if (v.period > 0) v.regime = "period-" + std::to_string(v.period) + " rattle";
-  else v.regime = "aperiodic rattle";
+  const std::string motion = v.period > 0 ? "period-" + std::to_string(v.period) : "aperiodic";
+  if (v.min_gap > 0) v.regime = motion + ", no separation";
+  else if (v.min_delta >= -b) v.regime = motion + ", single-sided impacts";
+  else v.regime = motion + ", double-sided impacts";
 }
 
 }  // namespace

@@ -104,15 +104,22 @@ std::vector<SpectralPeak> mark_peaks(const std::vector<double>& f, const std::ve
     return s;
   };
   std::vector<bool> taken(f.size(), false);
+  const long nbin = static_cast<long>(f.size());
   for (int k = 1; k <= harmonics; ++k) {
     const double fk = k * fm;
     if (fk > f.back()) break;
-    const auto c = static_cast<long>(std::lround(fk / df));
-    long best = -1;
-    for (long i = std::max(0L, c - 2); i <= std::min<long>(static_cast<long>(f.size()) - 1, c + 2); ++i)
-      if (best < 0 || p[i] > p[best]) best = i;
-    for (long i = std::max(0L, c - 2); i <= std::min<long>(static_cast<long>(f.size()) - 1, c + 2); ++i) taken[i] = true;
-    out.push_back(label(static_cast<std::size_t>(best), true));
+    const long c = std::lround(fk / df);
+    SpectralPeak s = label(static_cast<std::size_t>(c), true);
+    s.harmonic = k;
+    s.offset = f[c] - fk;
+    // Prominence: the bin against the median of the bins 3..10 away on both sides.
+    std::vector<double> around;
+    for (long i = c - 10; i <= c + 10; ++i)
+      if (i >= 1 && i < nbin && std::abs(i - c) >= 3) around.push_back(p[i]);
+    std::sort(around.begin(), around.end());
+    s.prominence = around.empty() ? 0.0 : p[c] / quantile_sorted(around, 0.5);
+    for (long i = std::max(0L, c - 2); i <= std::min(nbin - 1, c + 2); ++i) taken[i] = true;
+    out.push_back(s);
   }
   std::vector<std::size_t> maxima;
   for (std::size_t i = 2; i + 2 < f.size(); ++i) {

@@ -33,7 +33,7 @@ Nonlinear-dynamics tools for the spur-gear model (doc/nonlinear-dynamics.md). Su
   spectrum      Welch PSD of delta and of the mesh force of S1 (and of realizations 0..R-1:
                 mean PSD with a 95 % band); mesh harmonics and sidebands marked
                   --realizations R (0)  --transient S (0.1)  --decimate K (10 steps)
-                  --segment L (8192)  --overlap F (0.5)  --harmonics N (6)
+                  --segment L (30 mesh periods)  --overlap F (0.5)  --harmonics N (6)
   poincare      (delta, delta_dot) once per mesh period at mesh phase 0: S1, the phase ensemble
                 phi0 = j phi_n / P, and stochastic realizations 0..R-1
                   --phases P (64)  --realizations R (0)  --transient S (0.2)
@@ -185,8 +185,10 @@ int spectrum(const Options& o) {
   const int R = static_cast<int>(o.get("realizations", 0));
   const double transient = o.get("transient", 0.1);
   const int k = static_cast<int>(o.get("decimate", 10));
-  gd::WelchOptions w{static_cast<std::size_t>(o.get("segment", 8192)), o.get("overlap", 0.5)};
   const double h = c.run.time_step, fs = 1.0 / (k * h), fm = 1.0 / gd::mesh_period(g);
+  // Default segment: 30 mesh periods, so that every mesh harmonic falls on a bin centre.
+  const double seg_default = std::round(30.0 * gd::mesh_period(g) * fs);
+  gd::WelchOptions w{static_cast<std::size_t>(o.get("segment", seg_default)), o.get("overlap", 0.5)};
   std::vector<gd::LaneSpec> lanes{gd::deterministic_lane(c, c.friction_coefficient)};
   for (int r = 0; r < R; ++r) lanes.push_back(gd::stochastic_lane(c, c.friction_coefficient, r));
   const int L = static_cast<int>(lanes.size());
@@ -239,14 +241,18 @@ int spectrum(const Options& o) {
       f << "\n";
     }
     std::ofstream pk = open_csv(o, "peaks");
-    pk << "series,frequency,density,harmonic,offset,is_harmonic\n";
+    pk << "series,frequency,density,harmonic,offset,is_harmonic,prominence\n";
     const int H = static_cast<int>(o.get("harmonics", 6));
     const auto emit = [&](const std::string& name, const std::vector<double>& fr, const std::vector<double>& d) {
       for (const auto& p : gd::mark_peaks(fr, d, fm, H, 8)) {
         pk << name << "," << p.frequency << "," << p.density << "," << p.harmonic << "," << p.offset << ","
-           << (p.is_harmonic ? 1 : 0) << "\n";
-        std::printf("%-12s %s %9.2f Hz  (%d f_m %+8.2f Hz)  %.4g\n", name.c_str(), p.is_harmonic ? "harmonic" : "peak    ",
-                    p.frequency, p.harmonic, p.offset, p.density);
+           << (p.is_harmonic ? 1 : 0) << "," << p.prominence << "\n";
+        if (p.is_harmonic)
+          std::printf("%-12s harmonic %9.2f Hz  (%d f_m)  %.4g, prominence %.3g\n", name.c_str(), p.frequency,
+                      p.harmonic, p.density, p.prominence);
+        else
+          std::printf("%-12s peak     %9.2f Hz  (%d f_m %+8.2f Hz)  %.4g\n", name.c_str(), p.frequency, p.harmonic,
+                      p.offset, p.density);
       }
     };
     emit("delta_S1", s1.frequency, pd[0].density);

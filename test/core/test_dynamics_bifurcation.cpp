@@ -52,7 +52,7 @@ TEST(Bifurcation, HighLoadIsPeriodOne) {
   const auto r = gd::bifurcation_scan(base, gd::ScanParameter::Load, loads, o);
   ASSERT_EQ(r.size(), loads.size());
   for (const auto& v : r) {
-    EXPECT_EQ(v.regime, "no separation") << v.value;
+    EXPECT_EQ(v.regime, "period-1, no separation") << v.value;
     EXPECT_GT(v.min_gap, 0.0) << v.value;
     EXPECT_EQ(v.period, 1) << v.value;
     EXPECT_GE(v.points.size(), 60u);

@@ -33,7 +33,9 @@ struct ScanValue {
   int period = 0;              // smallest p <= max_period with x_{k+p} = x_k (tolerance); 0 = none found
   double min_gap = 0;          // min over the kept window of delta - b [m]; > 0: the teeth never separate
   double min_delta = 0;        // min delta over the kept window [m]; < -b: back-flank contact
-  std::string regime;          // "no separation", "period-p rattle", "aperiodic rattle"
+  // "<motion>, <contact>": motion "period-p" or "aperiodic"; contact "no separation" (delta > b
+  // throughout), "single-sided impacts" (contact lost, never delta < -b) or "double-sided impacts".
+  std::string regime;
 };
 
 // The mesh period [s] and the reference velocity scale v_ref = sqrt(2 Phi0 b) [m/s] of a configuration.

@@ -36,14 +36,15 @@ struct PsdBand {
 };
 PsdBand psd_band(const std::vector<Psd>& runs, double confidence = 0.95);
 
-// Peaks of a PSD: for each mesh harmonic k f_m (k = 1 .. harmonics) the largest bin within +-2
-// bins of it, and the `sidebands` largest other local maxima (a bin above its two neighbours on
+// Peaks of a PSD: for each mesh harmonic k f_m (k = 1 .. harmonics) the bin nearest to it (exactly
+// on it when the segment holds a whole number of mesh periods) with its prominence, and the `sidebands` largest other local maxima (a bin above its two neighbours on
 // each side) at or above f_m / 2, each labelled by its offset from the nearest harmonic.
 struct SpectralPeak {
   double frequency = 0, density = 0;
   int harmonic = 0;       // nearest harmonic k
   double offset = 0;      // frequency - k f_m [Hz]
   bool is_harmonic = false;
+  double prominence = 0;  // harmonics: density / median density of the bins 3..10 away (1: no line)
 };
 std::vector<SpectralPeak> mark_peaks(const std::vector<double>& frequency, const std::vector<double>& density,
                                      double mesh_frequency, int harmonics = 5, int sidebands = 8);
