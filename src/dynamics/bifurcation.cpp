@@ -75,7 +75,7 @@ std::vector<ScanValue> bifurcation_scan(const ModelConfig& base, ScanParameter p
   }
   std::vector<ScanValue> out(values.size());
   const bool shared = param == ScanParameter::Load || param == ScanParameter::Friction;
-  const int per_block = param == ScanParameter::Speed ? 1 : std::max(1, o.block_lanes);
+  const int per_block = std::max(1, o.block_lanes);
   const std::size_t blocks = (values.size() + per_block - 1) / per_block;
 
   tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t blk) {
@@ -83,6 +83,7 @@ std::vector<ScanValue> bifurcation_scan(const ModelConfig& base, ScanParameter p
     const GearPair gear = derive(configs[first].gear);
     PoincareOptions po;
     po.period = mesh_period(gear);
+    for (std::size_t i = first; i < last; ++i) po.lane_period.push_back(mesh_period(derive(configs[i].gear)));
     po.offset = 0;
     po.start = o.transient;
     po.end = o.duration;

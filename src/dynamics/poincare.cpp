@@ -1,5 +1,6 @@
 #include "gear_dynamics/dynamics/poincare.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -8,76 +9,89 @@ namespace gear_dynamics {
 
 bool on_step_grid(double t, double h) {
   const double r = t / h;
-  return std::abs(r - std::round(r)) <= 1e-9 * std::max(1.0, 1.0);
+  return std::abs(r - std::round(r)) <= 1e-9;
 }
 
 std::vector<PoincarePoint> poincare_section(LaneSystem& sys, const PoincareOptions& o,
                                             const std::function<void(const LaneSystem&)>& after_step) {
-  if (!(o.period > 0)) throw std::invalid_argument("poincare_section: period must be > 0");
   const double h = sys.time_step();
   const int lanes = sys.lanes(), dim = sys.dimension();
+  std::vector<double> period = o.lane_period;
+  if (period.empty()) period.assign(lanes, o.period);
+  if (static_cast<int>(period.size()) != lanes) throw std::invalid_argument("poincare_section: one period per lane");
+  for (double p : period)
+    if (!(p > 0)) throw std::invalid_argument("poincare_section: period must be > 0");
   const std::int64_t n_end = static_cast<std::int64_t>(std::llround(o.end / h));
-  std::vector<PoincarePoint> out;
-  const auto sample = [&](std::int64_t k, double t, bool grid, const std::vector<double>& prev, double s) {
-    for (int l = 0; l < lanes; ++l) {
-      PoincarePoint p;
-      p.lane = l;
-      p.k = k;
-      p.time = t;
-      p.on_grid = grid;
-      p.x.resize(dim);
-      for (int c = 0; c < dim; ++c) {
-        const double x1 = sys.state(l, c);
-        if (grid) { p.x[c] = x1; continue; }
-        const double x0 = prev[l * dim + c];
-        const int dc = sys.derivative_of(c);
-        if (dc < 0) {
-          p.x[c] = x0 + s * (x1 - x0);
-        } else {  // cubic Hermite on [t_n, t_n + h] with slopes from the derivative component
-          const double d0 = prev[l * dim + dc], d1 = sys.state(l, dc);
-          const double s2 = s * s, s3 = s2 * s;
-          p.x[c] = (2 * s3 - 3 * s2 + 1) * x0 + (s3 - 2 * s2 + s) * h * d0 + (-2 * s3 + 3 * s2) * x1 + (s3 - s2) * h * d1;
-        }
-      }
-      out.push_back(std::move(p));
-    }
+  // Per lane: exact (grid) sampling at steps n0 + k m, or interpolated at offset + k period.
+  struct LaneState {
+    bool exact;
+    std::int64_t m, n0, k;
+    double next;  // interpolated: t_k
   };
-
-  const bool exact = on_step_grid(o.period, h) && on_step_grid(o.offset, h);
-  if (exact) {
-    const std::int64_t m = std::llround(o.period / h), n0 = std::llround(o.offset / h);
-    std::int64_t k = 0;
-    while (n0 + k * m < sys.step_index() || (n0 + k * m) * h < o.start - 1e-9 * h) ++k;
-    const std::vector<double> none;
-    for (;;) {
-      const std::int64_t n = sys.step_index();
-      if (n == n0 + k * m) { sample(k, static_cast<double>(n) * h, true, none, 1.0); ++k; }
-      if (n >= n_end) break;
-      sys.step();
-      if (after_step) after_step(sys);
-    }
-    return out;
+  std::vector<LaneState> ls(lanes);
+  const bool offset_on_grid = on_step_grid(o.offset, h);
+  const double t_begin = std::max(o.start, sys.time());
+  for (int l = 0; l < lanes; ++l) {
+    LaneState& L = ls[l];
+    L.exact = offset_on_grid && on_step_grid(period[l], h);
+    L.m = std::llround(period[l] / h);
+    L.n0 = std::llround(o.offset / h);
+    L.k = static_cast<std::int64_t>(std::ceil((t_begin - o.offset) / period[l] - 1e-9));
+    if (L.k < 0) L.k = 0;
+    if (L.exact)
+      while (L.n0 + L.k * L.m < sys.step_index() || static_cast<double>(L.n0 + L.k * L.m) * h < o.start - 1e-9 * h) ++L.k;
+    L.next = o.offset + static_cast<double>(L.k) * period[l];
   }
-
-  std::int64_t k = static_cast<std::int64_t>(std::ceil((std::max(o.start, sys.time()) - o.offset) / o.period));
-  if (k < 0) k = 0;
+  std::vector<PoincarePoint> out;
   std::vector<double> prev(static_cast<std::size_t>(lanes * dim));
-  while (sys.step_index() < n_end) {
+  std::vector<char> due(lanes, 0);
+  const auto emit = [&](int l, double t, bool grid, double s) {
+    PoincarePoint p;
+    p.lane = l;
+    p.k = ls[l].k;
+    p.time = t;
+    p.on_grid = grid;
+    p.x.resize(dim);
+    for (int c = 0; c < dim; ++c) {
+      const double x1 = sys.state(l, c);
+      if (grid) { p.x[c] = x1; continue; }
+      const double x0 = prev[l * dim + c];
+      const int dc = sys.derivative_of(c);
+      if (dc < 0) {
+        p.x[c] = x0 + s * (x1 - x0);
+      } else {  // cubic Hermite on [t_n, t_n + h] with slopes from the derivative component
+        const double d0 = prev[l * dim + dc], d1 = sys.state(l, dc);
+        const double s2 = s * s, s3 = s2 * s;
+        p.x[c] = (2 * s3 - 3 * s2 + 1) * x0 + (s3 - 2 * s2 + s) * h * d0 + (-2 * s3 + 3 * s2) * x1 + (s3 - s2) * h * d1;
+      }
+    }
+    out.push_back(std::move(p));
+    ++ls[l].k;
+  };
+  for (;;) {
+    const std::int64_t n = sys.step_index();
+    for (int l = 0; l < lanes; ++l)
+      if (ls[l].exact && n == ls[l].n0 + ls[l].k * ls[l].m) emit(l, static_cast<double>(n) * h, true, 1.0);
+    if (n >= n_end) break;
     const double t0 = sys.time();
-    const double tk = o.offset + static_cast<double>(k) * o.period;
-    const bool due = tk <= t0 + h;
-    if (due)
-      for (int l = 0; l < lanes; ++l)
+    for (int l = 0; l < lanes; ++l) {
+      due[l] = 0;
+      if (ls[l].exact) continue;
+      ls[l].next = o.offset + static_cast<double>(ls[l].k) * period[l];
+      if (ls[l].next <= t0 + h && ls[l].next <= o.end) {
+        due[l] = 1;
         for (int c = 0; c < dim; ++c) prev[l * dim + c] = sys.state(l, c);
+      }
+    }
     sys.step();
     if (after_step) after_step(sys);
-    if (due) {
-      if (tk > o.end) break;
-      const double s = (tk - t0) / h;
-      sample(k, tk, false, prev, s);
-      ++k;
-    }
+    for (int l = 0; l < lanes; ++l)
+      if (due[l]) emit(l, ls[l].next, false, (ls[l].next - t0) / h);
   }
+  // Points in time order, lanes in order within one instant.
+  std::stable_sort(out.begin(), out.end(), [](const PoincarePoint& a, const PoincarePoint& b) {
+    return a.time < b.time || (a.time == b.time && a.lane < b.lane);
+  });
   return out;
 }
 

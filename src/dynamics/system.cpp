@@ -24,39 +24,92 @@ double mesh_force(const GearPair& gear, double stiffness, double delta, double d
 
 GearLanes::GearLanes(const std::vector<GearLaneSpec>& lanes, double time_step) : h_(time_step) {
   if (lanes.empty()) throw std::invalid_argument("GearLanes: needs at least one lane");
+  const int n = static_cast<int>(lanes.size());
+  const int p = (n + Ensemble::kPacket - 1) / Ensemble::kPacket * Ensemble::kPacket;
+  for (Eigen::ArrayXd* a : {&d_, &v_, &load_, &mu_, &q3_, &b_, &alpha_, &k_, &fa_, &fm_, &fb_}) a->setZero(p);
   lane_.reserve(lanes.size());
-  for (const GearLaneSpec& s : lanes) {
+  plan_.resize(lanes.size());
+  for (int i = 0; i < n; ++i) {
+    const GearLaneSpec& s = lanes[i];
     const GearPair g = derive(s.gear);
-    lane_.push_back(Lane{g, MeshSchedule(g, time_step), s.mu, s.load, s.initial.deflection, s.initial.velocity});
+    lane_.push_back(Lane{g, MeshSchedule(g, time_step)});
+    d_[i] = s.initial.deflection;
+    v_[i] = s.initial.velocity;
+    load_[i] = s.load;
+    mu_[i] = s.mu;
+    q3_[i] = g.q3;
+    b_[i] = g.in.backlash;
+    alpha_[i] = g.damping_coefficient;
   }
 }
 
 // Ensemble::step() for sigma = drift = 0: load1 = load0, so every stage load is the lane's load.
+void GearLanes::step_lane(int i, const StepPlan& plan) {
+  const double b = b_[i], alpha = alpha_[i], q3 = q3_[i], mu = mu_[i], load = load_[i];
+  double d = d_[i], v = v_[i];
+  for (int s = 0; s < plan.segments; ++s) {
+    const StepSegment& seg = plan.segment[s];
+    const double H = (seg.end - seg.begin) * h_, half = 0.5 * H;
+    const double qa = q3 + mu * seg.friction_start;
+    const double qm = q3 + mu * seg.friction_mid;
+    const double qb = q3 + mu * seg.friction_end;
+    const double K = seg.stiffness;
+    const double a1 = acceleration(d, v, load, K, qa, b, alpha);
+    const double v2 = v + half * a1;
+    const double a2 = acceleration(d + half * v, v2, load, K, qm, b, alpha);
+    const double v3 = v + half * a2;
+    const double a3 = acceleration(d + half * v2, v3, load, K, qm, b, alpha);
+    const double v4 = v + H * a3;
+    const double a4 = acceleration(d + H * v3, v4, load, K, qb, b, alpha);
+    d += (H / 6.0) * (v + 2.0 * v2 + 2.0 * v3 + v4);
+    v += (H / 6.0) * (a1 + 2.0 * a2 + 2.0 * a3 + a4);
+  }
+  d_[i] = d;
+  v_[i] = v;
+}
+
+// The lanes' plans are made one by one; packets of lanes whose steps are all unsplit (2999 steps in
+// 3000) are stepped as SIMD packets with the same operations in the same order as the scalar path
+// (and as the Ensemble), the others lane by lane.
 void GearLanes::step() {
-  for (Lane& L : lane_) {
-    const StepPlan plan = L.mesh.plan(n_);
-    const double b = L.gear.in.backlash, alpha = L.gear.damping_coefficient, q3 = L.gear.q3;
-    double d = L.d, v = L.v;
-    const double load = L.load;
-    for (int s = 0; s < plan.segments; ++s) {
-      const StepSegment& seg = plan.segment[s];
-      const double H = (seg.end - seg.begin) * h_, half = 0.5 * H;
-      const double qa = q3 + L.mu * seg.friction_start;
-      const double qm = q3 + L.mu * seg.friction_mid;
-      const double qb = q3 + L.mu * seg.friction_end;
-      const double K = seg.stiffness;
-      const double a1 = acceleration(d, v, load, K, qa, b, alpha);
-      const double v2 = v + half * a1;
-      const double a2 = acceleration(d + half * v, v2, load, K, qm, b, alpha);
-      const double v3 = v + half * a2;
-      const double a3 = acceleration(d + half * v2, v3, load, K, qm, b, alpha);
-      const double v4 = v + H * a3;
-      const double a4 = acceleration(d + H * v3, v4, load, K, qb, b, alpha);
-      d += (H / 6.0) * (v + 2.0 * v2 + 2.0 * v3 + v4);
-      v += (H / 6.0) * (a1 + 2.0 * a2 + 2.0 * a3 + a4);
+  using Packet = Eigen::Array<double, Ensemble::kPacket, 1>;
+  const int n = lanes();
+  for (int i = 0; i < n; ++i) plan_[i] = lane_[i].mesh.plan(n_);
+  const double H = h_, half = 0.5 * H;
+  for (int p0 = 0; p0 < n; p0 += Ensemble::kPacket) {
+    const int p1 = std::min(n, p0 + Ensemble::kPacket);
+    bool simple = true;
+    for (int i = p0; i < p1; ++i) simple = simple && plan_[i].segments == 1;
+    if (!simple) {
+      for (int i = p0; i < p1; ++i) step_lane(i, plan_[i]);
+      continue;
     }
-    L.d = d;
-    L.v = v;
+    for (int i = p0; i < p1; ++i) {
+      const StepSegment& seg = plan_[i].segment[0];
+      k_[i] = seg.stiffness;
+      fa_[i] = seg.friction_start;
+      fm_[i] = seg.friction_mid;
+      fb_[i] = seg.friction_end;
+    }
+    const auto seg = [&](const Eigen::ArrayXd& a) { return Packet(a.segment<Ensemble::kPacket>(p0)); };
+    const Packet b = seg(b_), alpha = seg(alpha_), q3 = seg(q3_), mu = seg(mu_), load = seg(load_), K = seg(k_);
+    const Packet qa = q3 + mu * seg(fa_), qm = q3 + mu * seg(fm_), qb = q3 + mu * seg(fb_);
+    const auto acc = [&](const Packet& d, const Packet& v, const Packet& q) -> Packet {
+      const Packet g = d - d.max(-b).min(b);
+      return load - q * (K * g + (alpha * g.abs()) * v);
+    };
+    Packet d = seg(d_), v = seg(v_);
+    const Packet a1 = acc(d, v, qa);
+    const Packet v2 = v + half * a1;
+    const Packet a2 = acc(d + half * v, v2, qm);
+    const Packet v3 = v + half * a2;
+    const Packet a3 = acc(d + half * v2, v3, qm);
+    const Packet v4 = v + H * a3;
+    const Packet a4 = acc(d + H * v3, v4, qb);
+    d += (H / 6.0) * (v + 2.0 * v2 + 2.0 * v3 + v4);
+    v += (H / 6.0) * (a1 + 2.0 * a2 + 2.0 * a3 + a4);
+    d_.segment<Ensemble::kPacket>(p0) = d;
+    v_.segment<Ensemble::kPacket>(p0) = v;
   }
   ++n_;
 }

@@ -284,7 +284,7 @@ int poincare(const Options& o) {
     gi.mesh_phase = j * g.mesh_period_angle / P;
     gd::GearLanes sys({gd::GearLaneSpec{gi, c.friction_coefficient, c.load.initial_mean, c.initial}}, h);
     const double offset = j == 0 ? 0.0 : (g.mesh_period_angle - gi.mesh_phase) / gi.pinion_speed;
-    ph[j] = gd::poincare_section(sys, {Tm, offset, transient, c.run.duration});
+    ph[j] = gd::poincare_section(sys, {Tm, offset, transient, c.run.duration, {}});
   });
   std::vector<gd::PoincarePoint> st;
   if (R > 0) {
@@ -292,7 +292,7 @@ int poincare(const Options& o) {
     for (int r = 0; r < R; ++r) lanes.push_back(gd::stochastic_lane(c, c.friction_coefficient, r));
     gd::Ensemble e(g, h, c.initial, lanes, c.seed);
     gd::EnsembleLanes sys(e);
-    st = gd::poincare_section(sys, {Tm, 0.0, transient, c.run.duration});
+    st = gd::poincare_section(sys, {Tm, 0.0, transient, c.run.duration, {}});
   }
   std::ofstream f = open_csv(o, "poincare");
   f << "set,run,phase0,k,t,delta,delta_dot,on_grid\n";
@@ -485,6 +485,9 @@ int safety(const Options& o) {
   for (std::size_t i = 0; i < km.time.size(); ++i)
     kf << km.time[i] << "," << km.survival[i] << "," << km.low[i] << "," << km.high[i] << "," << km.at_risk[i] << ","
        << km.events[i] << "\n";
+  // The curve ends at the last recorded time (censoring), with the last values.
+  if (!km.time.empty() && km.time.back() < runs.time.back())
+    kf << runs.time.back() << "," << km.survival.back() << "," << km.low.back() << "," << km.high.back() << ",0,0\n";
   // PDFs at T: histogram (doc/model.md §8 edges) and KDE with Silverman's bandwidth.
   std::ofstream pf = open_csv(o, "pdf");
   pf << "variable,x,histogram,kde,bandwidth\n";

@@ -25,7 +25,7 @@ TEST(Bifurcation, ForcedLinearOscillatorScan) {
   const double period = 2 * M_PI / 0.8, h = period / 2000;
   gd::LinearOscillatorLanes sys(lanes, h, std::vector<double>(4, 0.0), std::vector<double>(4, 0.0));
   // transient 600: e^(-0.05 * 600) = 1e-13
-  const auto pts = gd::poincare_section(sys, {period, 0.0, 600.0, 700.0});
+  const auto pts = gd::poincare_section(sys, {period, 0.0, 600.0, 700.0, {}});
   ASSERT_FALSE(pts.empty());
   for (const auto& q : pts) {
     double x, v;

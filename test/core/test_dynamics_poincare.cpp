@@ -16,7 +16,7 @@ namespace gd = gear_dynamics;
 TEST(Poincare, FreeOscillatorOwnPeriodIsOneFixedPoint) {
   gd::LinearOscillatorParams p{2 * M_PI, 0.0, 0.0, 1.0};
   gd::LinearOscillatorLanes sys({p}, 1e-3, {0.3}, {-0.2});
-  const auto pts = gd::poincare_section(sys, {1.0, 0.0, 0.0, 100.0});
+  const auto pts = gd::poincare_section(sys, {1.0, 0.0, 0.0, 100.0, {}});
   ASSERT_EQ(pts.size(), 101u);
   for (const auto& q : pts) {
     EXPECT_TRUE(q.on_grid);
@@ -30,7 +30,7 @@ TEST(Poincare, FreeOscillatorOwnPeriodIsOneFixedPoint) {
 TEST(Poincare, InterpolatedSamplesOffTheGrid) {
   gd::LinearOscillatorParams p{2 * M_PI, 0.0, 0.0, 1.0};
   gd::LinearOscillatorLanes sys({p}, 7e-4, {0.3}, {-0.2});
-  const auto pts = gd::poincare_section(sys, {1.0, 0.25, 0.0, 50.0});
+  const auto pts = gd::poincare_section(sys, {1.0, 0.25, 0.0, 50.0, {}});
   ASSERT_EQ(pts.size(), 50u);
   double x = 0, v = 0;
   // Exact solution at t = 0.25 + k: x(t) = 0.3 cos(w t) - 0.2/w sin(w t).
@@ -52,7 +52,7 @@ TEST(Poincare, ForcedOscillatorAnalyticSteadyState) {
   const double period = 2 * M_PI / 1.3, h = period / 1000;
   gd::LinearOscillatorLanes sys(lanes, h, {0.0, 1.0, -1.0}, {0.0, 0.0, 0.5});
   // transient 250: e^(-zeta omega t) = e^-25 = 1.4e-11
-  const auto pts = gd::poincare_section(sys, {period, 0.0, 250.0, 300.0});
+  const auto pts = gd::poincare_section(sys, {period, 0.0, 250.0, 300.0, {}});
   ASSERT_FALSE(pts.empty());
   for (const auto& q : pts) {
     double x, v;
@@ -72,25 +72,41 @@ gd::ModelConfig paper_config() {
 
 }  // namespace
 
-// GearLanes (a mesh schedule per lane) steps exactly like the production Ensemble: bit for bit over
-// 50 ms (about 30 impacts), at two speeds, two mesh phases and two friction coefficients.
+// GearLanes (a mesh schedule per lane, SIMD packets of lanes when no lane's step is split) steps
+// exactly like the production Ensemble: bit for bit over 50 ms (about 30 impacts), for 8 lanes of
+// one block at two speeds, two mesh phases and two friction coefficients, plus one lane alone.
 TEST(GearLanes, BitIdenticalToEnsemble) {
   const gd::ModelConfig base = paper_config();
+  std::vector<gd::ModelConfig> cs;
+  std::vector<double> mus;
   for (double rpm : {1000.0, 1370.0})
     for (double phase : {0.0, 0.11})
       for (double mu : {0.0, 0.04}) {
         gd::ModelConfig c = gd::with_parameter(base, gd::ScanParameter::Speed, rpm);
         c.gear.mesh_phase = phase;
-        const gd::GearPair g = gd::derive(c.gear);
-        gd::Ensemble e(g, c.run.time_step, c.initial, {gd::deterministic_lane(c, mu)}, c.seed);
-        gd::GearLanes lanes({gd::GearLaneSpec{c.gear, mu, c.load.initial_mean, c.initial}}, c.run.time_step);
-        for (int n = 0; n < 50000; ++n) {
-          e.step();
-          lanes.step();
-        }
-        EXPECT_EQ(e.delta()[0], lanes.state(0, 0)) << rpm << " rpm, phase " << phase << ", mu " << mu;
-        EXPECT_EQ(e.velocity()[0], lanes.state(0, 1));
+        cs.push_back(c);
+        mus.push_back(mu);
       }
+  std::vector<gd::GearLaneSpec> specs;
+  for (std::size_t i = 0; i < cs.size(); ++i)
+    specs.push_back(gd::GearLaneSpec{cs[i].gear, mus[i], cs[i].load.initial_mean, cs[i].initial});
+  gd::GearLanes block(specs, base.run.time_step);
+  gd::GearLanes alone({specs[5]}, base.run.time_step);
+  for (int n = 0; n < 50000; ++n) {
+    block.step();
+    alone.step();
+  }
+  for (std::size_t i = 0; i < cs.size(); ++i) {
+    const gd::ModelConfig& c = cs[i];
+    gd::Ensemble e(gd::derive(c.gear), c.run.time_step, c.initial, {gd::deterministic_lane(c, mus[i])}, c.seed);
+    for (int n = 0; n < 50000; ++n) e.step();
+    EXPECT_EQ(e.delta()[0], block.state(static_cast<int>(i), 0)) << "lane " << i;
+    EXPECT_EQ(e.velocity()[0], block.state(static_cast<int>(i), 1)) << "lane " << i;
+    if (i == 5) {
+      EXPECT_EQ(e.delta()[0], alone.state(0, 0));
+      EXPECT_EQ(e.velocity()[0], alone.state(0, 1));
+    }
+  }
 }
 
 // At 1000 rpm the mesh period, 3 ms, is 3000 steps: the gear's section is taken on the grid, and it
@@ -101,7 +117,7 @@ TEST(Poincare, GearSectionOnTheGrid) {
   EXPECT_TRUE(gd::on_step_grid(gd::mesh_period(g), c.run.time_step));
   gd::Ensemble e(g, c.run.time_step, c.initial, {gd::deterministic_lane(c, 0.04)}, c.seed);
   gd::EnsembleLanes sys(e);
-  const auto pts = gd::poincare_section(sys, {gd::mesh_period(g), 0.0, 0.0, 0.03});
+  const auto pts = gd::poincare_section(sys, {gd::mesh_period(g), 0.0, 0.0, 0.03, {}});
   ASSERT_EQ(pts.size(), 11u);
   gd::Ensemble ref(g, c.run.time_step, c.initial, {gd::deterministic_lane(c, 0.04)}, c.seed);
   for (std::size_t k = 0; k < pts.size(); ++k) {

@@ -3,7 +3,7 @@
 // Poincare points (delta, delta_dot) once per mesh period at the initial mesh phase. Values that
 // share the mesh schedule (mean load, mu) run as lanes of one production Ensemble block; values that
 // change it (pinion speed, damping ratio, which sets alpha for every lane of an Ensemble) run as
-// GearLanes blocks. Blocks run in parallel (TBB).
+// GearLanes blocks (a schedule and a sampling period per lane). Blocks run in parallel (TBB).
 #pragma once
 
 #include <string>
@@ -22,7 +22,7 @@ std::string scan_parameter_name(ScanParameter p);
 struct ScanOptions {
   double duration = 2.0;        // [s]
   double transient = 1.0;       // [s] discarded
-  int block_lanes = 8;          // lanes per block (Load, Friction, Damping)
+  int block_lanes = 8;          // lanes (parameter values) per block
   int max_period = 16;          // periods tested for periodicity
   double tolerance = 1e-3;      // periodicity: |x_{k+p} - x_k| <= tolerance * (b, v_ref) per component
 };

@@ -18,6 +18,7 @@ struct PoincareOptions {
   double offset = 0;  // [s]
   double start = 0;   // first time kept [s] (the transient before it is discarded)
   double end = 0;     // the system is stepped to this time [s]
+  std::vector<double> lane_period;  // if not empty: one period per lane [s] (overrides period)
 };
 
 struct PoincarePoint {

@@ -74,21 +74,24 @@ class GearLanes : public LaneSystem {
   double time_step() const override { return h_; }
   std::int64_t step_index() const override { return n_; }
   void step() override;
-  double state(int lane, int c) const override { return c == 0 ? lane_[lane].d : lane_[lane].v; }
-  void set_state(int lane, const double* x) override { lane_[lane].d = x[0]; lane_[lane].v = x[1]; }
+  double state(int lane, int c) const override { return c == 0 ? d_[lane] : v_[lane]; }
+  void set_state(int lane, const double* x) override { d_[lane] = x[0]; v_[lane] = x[1]; }
   int derivative_of(int c) const override { return c == 0 ? 1 : -1; }
   const GearPair& gear(int lane) const { return lane_[lane].gear; }
   const MeshSchedule& mesh(int lane) const { return lane_[lane].mesh; }
-  double load(int lane) const { return lane_[lane].load; }
-  double mu(int lane) const { return lane_[lane].mu; }
+  double load(int lane) const { return load_[lane]; }
+  double mu(int lane) const { return mu_[lane]; }
 
  private:
   struct Lane {
     GearPair gear;
     MeshSchedule mesh;
-    double mu, load, d, v;
   };
+  void step_lane(int i, const StepPlan& plan);
   std::vector<Lane> lane_;
+  // Structure of arrays, padded to a multiple of Ensemble::kPacket lanes (padding lanes stay 0).
+  Eigen::ArrayXd d_, v_, load_, mu_, q3_, b_, alpha_, k_, fa_, fm_, fb_;
+  std::vector<StepPlan> plan_;
   double h_;
   std::int64_t n_ = 0;
 };
