@@ -14,6 +14,13 @@ ga bifurcation --parameter speed --from 250 --to 3000 --values 400 --duration 2 
 ga lyapunov --parameter speed --from 250 --to 3000 --values 100 --duration 1.2 --transient 0.2 --output "$OUT/speed_ly"
 /usr/bin/python3 "$PLOT" bifurcation "$OUT/speed" --lyapunov "$OUT/speed_ly"
 
+# The same speed range at 100x the paper's load (Phi0 = 2000 m/s^2), where the motion is periodic.
+ga bifurcation --parameter speed --from 250 --to 3000 --values 400 --duration 2 --transient 1 \
+   --set load.initial_mean=2000 --output "$OUT/speed_load2000"
+ga lyapunov --parameter speed --from 250 --to 3000 --values 100 --duration 1.2 --transient 0.2 \
+   --set load.initial_mean=2000 --output "$OUT/speed_load2000_ly"
+/usr/bin/python3 "$PLOT" bifurcation "$OUT/speed_load2000" --lyapunov "$OUT/speed_load2000_ly"
+
 ga bifurcation --parameter load --from 50 --to 5000 --values 400 --log --duration 2 --transient 1 --output "$OUT/load"
 ga lyapunov --parameter load --from 50 --to 5000 --values 100 --log --duration 1.2 --transient 0.2 --output "$OUT/load_ly"
 /usr/bin/python3 "$PLOT" bifurcation "$OUT/load" --lyapunov "$OUT/load_ly"

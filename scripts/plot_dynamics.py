@@ -114,11 +114,16 @@ def bifurcation(prefix, args):
     sx = col(summary, "value")
     reg = col(summary, "regime", str)
     colors = {"no separation": "C2", "single-sided impacts": "C0", "double-sided impacts": "C3"}
+    periodic = np.array([r.startswith("period-") for r in reg])
     for ax in axes[:2]:
+        top = ax.get_ylim()[1]
         for key, c in colors.items():
             sel = np.array([key in r for r in reg])
             if sel.any():
-                ax.plot(sx[sel], np.full(sel.sum(), ax.get_ylim()[1]), "|", color=c, ms=6, label=key)
+                ax.plot(sx[sel], np.full(sel.sum(), top), "|", color=c, ms=6, label=key)
+        if periodic.any():
+            ax.plot(sx[periodic], np.full(periodic.sum(), ax.get_ylim()[0]), "|", color="C1", ms=6,
+                    label="periodic (bottom ticks)")
     axes[0].legend(fontsize=7, loc="lower left", title="contact (top ticks)", title_fontsize=7)
     if ly:
         lx = col(ly, param)

@@ -329,7 +329,7 @@ int bifurcation(const Options& o) {
   s << "parameter,value,period,regime,min_gap,min_delta,points\n";
   std::map<std::string, int> count;
   for (const auto& v : r) {
-    s << gd::scan_parameter_name(p) << "," << v.value << "," << v.period << "," << v.regime << "," << v.min_gap << ","
+    s << gd::scan_parameter_name(p) << "," << v.value << "," << v.period << ",\"" << v.regime << "\"," << v.min_gap << ","
       << v.min_delta << "," << v.points.size() << "\n";
     ++count[v.regime];
   }
