@@ -73,6 +73,12 @@ void Ensemble::set_load(int lane, double load) {
   load_[lane] = load;
 }
 
+void Ensemble::set_state(int lane, double delta, double velocity) {
+  if (lane < 0 || lane >= lanes()) throw std::out_of_range("Ensemble::set_state: no such lane");
+  delta_[lane] = delta;
+  velocity_[lane] = velocity;
+}
+
 void Ensemble::refill_normals(std::uint64_t first_index) {
   normals_first_ = first_index;
   double row[kNormalChunk];

@@ -11,7 +11,7 @@ import time
 import xml.etree.ElementTree as ET
 
 # Bottom to top; a layer may include its own headers and those of every layer before it.
-LAYERS = ["model", "engine", "config", "live", "montecarlo", "analysis"]
+LAYERS = ["model", "engine", "config", "live", "montecarlo", "analysis", "dynamics"]
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 INCLUDE = re.compile(r'^\s*#\s*include\s*[<"]([^>"]+)[>"]', re.M)
 # Headers that mean ROS: the ROS client libraries and message packages, and the package's own

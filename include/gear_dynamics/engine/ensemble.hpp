@@ -77,6 +77,9 @@ class Ensemble {
   void set_drift(int lane, double drift);
   // Sets the lane's load state Phi [m/s^2] now; the load SDE goes on from it (an external load).
   void set_load(int lane, double load);
+  // Overwrites one lane's (delta, delta_dot) at the current step; the load and the random stream
+  // are left alone (the two-trajectory Lyapunov method, doc/nonlinear-dynamics.md §4).
+  void set_state(int lane, double delta, double velocity);
 
  private:
   void refill_normals(std::uint64_t first_index);

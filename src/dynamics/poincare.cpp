@@ -1,0 +1,164 @@
+#include "gear_dynamics/dynamics/poincare.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace gear_dynamics {
+
+bool on_step_grid(double t, double h) {
+  const double r = t / h;
+  return std::abs(r - std::round(r)) <= 1e-9;
+}
+
+std::vector<PoincarePoint> poincare_section(LaneSystem& sys, const PoincareOptions& o,
+                                            const std::function<void(const LaneSystem&)>& after_step) {
+  const double h = sys.time_step();
+  const int lanes = sys.lanes(), dim = sys.dimension();
+  std::vector<double> period = o.lane_period;
+  if (period.empty()) period.assign(lanes, o.period);
+  if (static_cast<int>(period.size()) != lanes) throw std::invalid_argument("poincare_section: one period per lane");
+  for (double p : period)
+    if (!(p > 0)) throw std::invalid_argument("poincare_section: period must be > 0");
+  const std::int64_t n_end = static_cast<std::int64_t>(std::llround(o.end / h));
+  // Per lane: exact (grid) sampling at steps n0 + k m, or interpolated at offset + k period.
+  struct LaneState {
+    bool exact;
+    std::int64_t m, n0, k;
+    double next;  // interpolated: t_k
+  };
+  std::vector<LaneState> ls(lanes);
+  const bool offset_on_grid = on_step_grid(o.offset, h);
+  const double t_begin = std::max(o.start, sys.time());
+  for (int l = 0; l < lanes; ++l) {
+    LaneState& L = ls[l];
+    L.exact = offset_on_grid && on_step_grid(period[l], h);
+    L.m = std::llround(period[l] / h);
+    L.n0 = std::llround(o.offset / h);
+    L.k = static_cast<std::int64_t>(std::ceil((t_begin - o.offset) / period[l] - 1e-9));
+    if (L.k < 0) L.k = 0;
+    if (L.exact)
+      while (L.n0 + L.k * L.m < sys.step_index() || static_cast<double>(L.n0 + L.k * L.m) * h < o.start - 1e-9 * h) ++L.k;
+    L.next = o.offset + static_cast<double>(L.k) * period[l];
+  }
+  std::vector<PoincarePoint> out;
+  std::vector<double> prev(static_cast<std::size_t>(lanes * dim));
+  std::vector<char> due(lanes, 0);
+  const auto emit = [&](int l, double t, bool grid, double s) {
+    PoincarePoint p;
+    p.lane = l;
+    p.k = ls[l].k;
+    p.time = t;
+    p.on_grid = grid;
+    p.x.resize(dim);
+    for (int c = 0; c < dim; ++c) {
+      const double x1 = sys.state(l, c);
+      if (grid) { p.x[c] = x1; continue; }
+      const double x0 = prev[l * dim + c];
+      const int dc = sys.derivative_of(c);
+      if (dc < 0) {
+        p.x[c] = x0 + s * (x1 - x0);
+      } else {  // cubic Hermite on [t_n, t_n + h] with slopes from the derivative component
+        const double d0 = prev[l * dim + dc], d1 = sys.state(l, dc);
+        const double s2 = s * s, s3 = s2 * s;
+        p.x[c] = (2 * s3 - 3 * s2 + 1) * x0 + (s3 - 2 * s2 + s) * h * d0 + (-2 * s3 + 3 * s2) * x1 + (s3 - s2) * h * d1;
+      }
+    }
+    out.push_back(std::move(p));
+    ++ls[l].k;
+  };
+  for (;;) {
+    const std::int64_t n = sys.step_index();
+    for (int l = 0; l < lanes; ++l)
+      if (ls[l].exact && n == ls[l].n0 + ls[l].k * ls[l].m) emit(l, static_cast<double>(n) * h, true, 1.0);
+    if (n >= n_end) break;
+    const double t0 = sys.time();
+    for (int l = 0; l < lanes; ++l) {
+      due[l] = 0;
+      if (ls[l].exact) continue;
+      ls[l].next = o.offset + static_cast<double>(ls[l].k) * period[l];
+      if (ls[l].next <= t0 + h && ls[l].next <= o.end) {
+        due[l] = 1;
+        for (int c = 0; c < dim; ++c) prev[l * dim + c] = sys.state(l, c);
+      }
+    }
+    sys.step();
+    if (after_step) after_step(sys);
+    for (int l = 0; l < lanes; ++l)
+      if (due[l]) emit(l, ls[l].next, false, (ls[l].next - t0) / h);
+  }
+  // Points in time order, lanes in order within one instant.
+  std::stable_sort(out.begin(), out.end(), [](const PoincarePoint& a, const PoincarePoint& b) {
+    return a.time < b.time || (a.time == b.time && a.lane < b.lane);
+  });
+  return out;
+}
+
+std::vector<LyapunovResult> largest_lyapunov(LaneSystem& sys, const LyapunovOptions& o) {
+  const int lanes = sys.lanes(), dim = sys.dimension();
+  if (lanes % 2 != 0) throw std::invalid_argument("largest_lyapunov: lanes come in pairs (reference, perturbed)");
+  if (o.renormalise_every < 1) throw std::invalid_argument("largest_lyapunov: renormalise_every must be >= 1");
+  std::vector<double> scale = o.scale;
+  if (scale.empty()) scale.assign(dim, 1.0);
+  if (static_cast<int>(scale.size()) != dim) throw std::invalid_argument("largest_lyapunov: one scale per component");
+  const double h = sys.time_step();
+  const std::int64_t n_transient = std::llround(o.transient / h);
+  const std::int64_t intervals = std::llround(o.duration / h) / o.renormalise_every;
+  const int pairs = lanes / 2;
+  std::vector<double> x(dim);
+
+  // Transient: the perturbed lane follows the reference exactly.
+  for (int p = 0; p < pairs; ++p) {
+    for (int c = 0; c < dim; ++c) x[c] = sys.state(2 * p, c);
+    sys.set_state(2 * p + 1, x.data());
+  }
+  while (sys.step_index() < n_transient) sys.step();
+
+  const double e = 1.0 / std::sqrt(static_cast<double>(dim));
+  for (int p = 0; p < pairs; ++p) {
+    for (int c = 0; c < dim; ++c) x[c] = sys.state(2 * p, c) + o.separation * e * scale[c];
+    sys.set_state(2 * p + 1, x.data());
+  }
+  std::vector<LyapunovResult> res(pairs);
+  std::vector<double> sum(pairs, 0.0);
+  for (auto& r : res) {
+    r.max_log_growth = -std::numeric_limits<double>::infinity();
+    r.min_log_growth = std::numeric_limits<double>::infinity();
+  }
+  const double interval_time = static_cast<double>(o.renormalise_every) * h;
+  for (std::int64_t i = 1; i <= intervals; ++i) {
+    for (std::int64_t s = 0; s < o.renormalise_every; ++s) sys.step();
+    for (int p = 0; p < pairs; ++p) {
+      double d2 = 0;
+      for (int c = 0; c < dim; ++c) {
+        const double dc = (sys.state(2 * p + 1, c) - sys.state(2 * p, c)) / scale[c];
+        d2 += dc * dc;
+      }
+      const double d = std::sqrt(d2);
+      if (!(d > 0) || !std::isfinite(d))
+        throw std::runtime_error("largest_lyapunov: the separation collapsed to 0 or became non-finite; "
+                                 "choose a larger separation or renormalise more often");
+      const double g = std::log(d / o.separation);
+      sum[p] += g;
+      LyapunovResult& r = res[p];
+      r.max_log_growth = std::max(r.max_log_growth, g);
+      r.min_log_growth = std::min(r.min_log_growth, g);
+      const double f = o.separation / d;
+      for (int c = 0; c < dim; ++c)
+        x[c] = sys.state(2 * p, c) + (sys.state(2 * p + 1, c) - sys.state(2 * p, c)) * f;
+      sys.set_state(2 * p + 1, x.data());
+      if (o.record_every > 0 && (i % o.record_every == 0 || i == intervals)) {
+        r.time.push_back(sys.time());
+        r.running.push_back(sum[p] / (static_cast<double>(i) * interval_time));
+      }
+    }
+  }
+  for (int p = 0; p < pairs; ++p) {
+    res[p].intervals = intervals;
+    res[p].exponent = intervals > 0 ? sum[p] / (static_cast<double>(intervals) * interval_time) : 0.0;
+  }
+  return res;
+}
+
+}  // namespace gear_dynamics

@@ -1,0 +1,543 @@
+// gear_analyze: the nonlinear-dynamics tools of doc/nonlinear-dynamics.md as one command each —
+// spectrum, poincare, bifurcation, lyapunov, safety. Writes CSV (SI units) with a common prefix and
+// prints a summary; --png draws the figures with scripts/plot_dynamics.py. No ROS master needed.
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "gear_dynamics/analysis/statistics.hpp"
+#include "gear_dynamics/config/config.hpp"
+#include "gear_dynamics/dynamics/bifurcation.hpp"
+#include "gear_dynamics/dynamics/poincare.hpp"
+#include "gear_dynamics/dynamics/safety.hpp"
+#include "gear_dynamics/dynamics/spectrum.hpp"
+#include "gear_dynamics/engine/ensemble.hpp"
+
+namespace gd = gear_dynamics;
+
+namespace {
+
+const char* kUsage = R"(usage: gear_analyze SUBCOMMAND [options]
+Nonlinear-dynamics tools for the spur-gear model (doc/nonlinear-dynamics.md). Subcommands:
+  spectrum      Welch PSD of delta and of the mesh force of S1 (and of realizations 0..R-1:
+                mean PSD with a 95 % band); mesh harmonics and sidebands marked
+                  --realizations R (0)  --transient S (0.1)  --decimate K (10 steps)
+                  --segment L (30 mesh periods)  --overlap F (0.5)  --harmonics N (6)
+  poincare      (delta, delta_dot) once per mesh period at mesh phase 0: S1, the phase ensemble
+                phi0 = j phi_n / P, and stochastic realizations 0..R-1
+                  --phases P (64)  --realizations R (0)  --transient S (0.2)
+  bifurcation   Poincare points of deterministic runs vs one parameter
+                  --parameter speed|load|mu|damping (speed [rpm], load = Phi0 [m/s^2], mu, zeta_ref)
+                  --from X --to Y --values N (400)  --log  --transient S (1.0)
+  lyapunov      largest Lyapunov exponent (two trajectories, renormalised every --renormalise
+                steps) of S1 over the phase ensemble, or along a parameter (--parameter ...)
+                  --phases P (64)  --transient S (0.2)  --renormalise N (100)
+                  --separation D0 (1e-8, in units of b and v_ref)  --step-divisor M (1; 2 = h/2)
+                  --parameter NAME --from X --to Y --values N [--log]
+  safety        P(delta in I_d and delta_dot in I_v) over time with Wilson bands, first passage
+                out of the safe set after --settle, Kaplan-Meier survival, PDFs (histogram + KDE)
+                  --realizations R (100)  --record-every N (1000 steps)  --settle S (0.3)
+                  --delta-interval LO,HI (0.040,0.055 mm)  --velocity-interval LO,HI (-16,16 mm/s)
+Common options:
+  --duration S        simulated time [s] (spectrum, poincare, safety: run.duration;
+                      bifurcation, lyapunov: 2.0 and 1.2)
+  --config FILE       YAML file overlaid on the defaults (repeatable)
+  --set SEC.KEY=VAL   override one parameter (repeatable)
+  --mu X              friction coefficient (default gear_pair.friction_coefficient)
+  --output PREFIX     CSV files PREFIX_<name>.csv (default gear_analyze)
+  --png               then draw PREFIX_*.png with scripts/plot_dynamics.py
+)";
+
+struct Options {
+  std::string command;
+  std::vector<std::string> files, sets;
+  double mu = -1;
+  std::string output = "gear_analyze";
+  bool png = false;
+  std::map<std::string, std::string> kv;
+  bool log = false;
+  double get(const std::string& k, double def) const {
+    auto it = kv.find(k);
+    return it == kv.end() ? def : std::stod(it->second);
+  }
+  std::string str(const std::string& k, const std::string& def) const {
+    auto it = kv.find(k);
+    return it == kv.end() ? def : it->second;
+  }
+};
+
+Options parse(int argc, char** argv) {
+  Options o;
+  if (argc < 2) throw std::runtime_error(std::string("a subcommand is needed\n") + kUsage);
+  o.command = argv[1];
+  if (o.command == "-h" || o.command == "--help") { std::cout << kUsage; std::exit(0); }
+  static const std::vector<std::string> valued = {
+      "realizations", "transient", "decimate", "segment", "overlap", "harmonics", "phases", "parameter",
+      "from", "to", "values", "renormalise", "separation", "step-divisor", "record-every", "settle",
+      "delta-interval", "velocity-interval", "duration"};
+  for (int i = 2; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw std::runtime_error("option " + a + " needs a value");
+      return argv[++i];
+    };
+    if (a == "--config") o.files.push_back(value());
+    else if (a == "--set") o.sets.push_back(value());
+    else if (a == "--mu") o.mu = std::stod(value());
+    else if (a == "--output") o.output = value();
+    else if (a == "--png") o.png = true;
+    else if (a == "--log") o.log = true;
+    else if (a == "-h" || a == "--help") { std::cout << kUsage; std::exit(0); }
+    else if (a.rfind("--", 0) == 0 && std::find(valued.begin(), valued.end(), a.substr(2)) != valued.end())
+      o.kv[a.substr(2)] = value();
+    else throw std::runtime_error("unknown option '" + a + "' (gear_analyze --help)");
+  }
+  return o;
+}
+
+std::string config_dir() {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> tried;
+  if (const char* env = std::getenv("GEAR_DYNAMICS_CONFIG_DIR")) tried.emplace_back(env);
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  if (!ec) tried.push_back(exe.parent_path().parent_path().parent_path() / "share" / "gear_dynamics" / "config");
+  if (const char* rpp = std::getenv("ROS_PACKAGE_PATH")) {
+    std::stringstream paths(rpp);
+    for (std::string root; std::getline(paths, root, ':');)
+      if (!root.empty()) tried.push_back(fs::path(root) / "gear_dynamics" / "config");
+  }
+  for (const fs::path& d : tried)
+    if (fs::is_regular_file(d / "gear_pair.yaml", ec)) return d.string();
+  throw std::runtime_error("cannot find the default configuration (gear_pair.yaml); set GEAR_DYNAMICS_CONFIG_DIR");
+}
+
+void apply_set(YAML::Node& root, const std::string& assignment) {
+  const auto eq = assignment.find('='), dot = assignment.find('.');
+  if (eq == std::string::npos || dot == std::string::npos || dot > eq)
+    throw std::runtime_error("--set expects SECTION.KEY=VALUE, got '" + assignment + "'");
+  YAML::Node overlay;
+  overlay[assignment.substr(0, dot)][assignment.substr(dot + 1, eq - dot - 1)] = YAML::Load(assignment.substr(eq + 1));
+  gd::merge_yaml(root, overlay);
+}
+
+gd::ModelConfig load_config(const Options& o, double duration) {
+  const std::string dir = config_dir();
+  std::vector<std::string> files = {dir + "/gear_pair.yaml", dir + "/load.yaml", dir + "/run.yaml"};
+  files.insert(files.end(), o.files.begin(), o.files.end());
+  YAML::Node root = gd::read_yaml_files(files);
+  for (const auto& s : o.sets) apply_set(root, s);
+  if (o.mu >= 0) root["gear_pair"]["friction_coefficient"] = o.mu;
+  if (duration > 0) {
+    root["run"]["duration"] = duration;
+    if (root["run"]["window"] && root["run"]["window"].as<double>() > duration) root["run"]["window"] = duration;
+  }
+  // Snapshot times are not used here; keep only those inside the run.
+  double T = root["run"]["duration"].as<double>();
+  YAML::Node kept(YAML::NodeType::Sequence);
+  for (const YAML::Node& t : root["run"]["snapshot_times"])
+    if (t.as<double>() <= T) kept.push_back(t);
+  if (kept.size() == 0) kept.push_back(T);
+  root["run"]["snapshot_times"] = kept;
+  return gd::parse_config(root);
+}
+
+std::ofstream open_csv(const Options& o, const std::string& name) {
+  const std::string path = o.output + "_" + name + ".csv";
+  std::ofstream f(path);
+  if (!f) throw std::runtime_error("cannot write " + path);
+  f.precision(17);
+  std::cout << "wrote " << path << "\n";
+  return f;
+}
+
+std::vector<double> value_list(const Options& o) {
+  const double a = o.get("from", NAN), b = o.get("to", NAN);
+  const int n = static_cast<int>(o.get("values", 400));
+  if (!std::isfinite(a) || !std::isfinite(b) || n < 1) throw std::runtime_error("--from, --to and --values are needed");
+  std::vector<double> v;
+  for (int i = 0; i < n; ++i) {
+    const double s = n == 1 ? 0.0 : static_cast<double>(i) / (n - 1);
+    v.push_back(o.log ? a * std::pow(b / a, s) : a + s * (b - a));
+  }
+  return v;
+}
+
+double since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// ---------------------------------------------------------------------------------------------
+int spectrum(const Options& o) {
+  const gd::ModelConfig c = load_config(o, o.get("duration", 0));
+  const gd::GearPair g = gd::derive(c.gear);
+  const int R = static_cast<int>(o.get("realizations", 0));
+  const double transient = o.get("transient", 0.1);
+  const int k = static_cast<int>(o.get("decimate", 10));
+  const double h = c.run.time_step, fs = 1.0 / (k * h), fm = 1.0 / gd::mesh_period(g);
+  // Default segment: 30 mesh periods, so that every mesh harmonic falls on a bin centre.
+  const double seg_default = std::round(30.0 * gd::mesh_period(g) * fs);
+  gd::WelchOptions w{static_cast<std::size_t>(o.get("segment", seg_default)), o.get("overlap", 0.5)};
+  std::vector<gd::LaneSpec> lanes{gd::deterministic_lane(c, c.friction_coefficient)};
+  for (int r = 0; r < R; ++r) lanes.push_back(gd::stochastic_lane(c, c.friction_coefficient, r));
+  const int L = static_cast<int>(lanes.size());
+  std::vector<std::vector<double>> delta(L), force(L);
+  const auto t0 = std::chrono::steady_clock::now();
+  // Blocks of 16 lanes in parallel; S1 is lane 0 of block 0.
+  const int per = 16, blocks = (L + per - 1) / per;
+  tbb::parallel_for(0, blocks, [&](int blk) {
+    const int first = blk * per, last = std::min(L, first + per);
+    gd::Ensemble e(g, h, c.initial, std::vector<gd::LaneSpec>(lanes.begin() + first, lanes.begin() + last), c.seed);
+    const std::int64_t N = c.run.steps(), n0 = std::llround(transient / h);
+    for (std::int64_t n = 0; n <= N; ++n) {
+      if (n >= n0 && (n - n0) % k == 0) {
+        const double K = e.mesh().stiffness(e.time());
+        for (int l = 0; l < last - first; ++l) {
+          delta[first + l].push_back(e.delta()[l]);
+          force[first + l].push_back(gd::mesh_force(g, K, e.delta()[l], e.velocity()[l]));
+        }
+      }
+      if (n < N) e.step();
+    }
+  });
+  std::vector<gd::Psd> pd, pf;
+  for (int l = 0; l < L; ++l) {
+    pd.push_back(gd::welch_psd(delta[l], fs, w));
+    pf.push_back(gd::welch_psd(force[l], fs, w));
+  }
+  const gd::Psd& s1 = pd[0];
+  std::printf("# spectrum: mu %g, T %g s, transient %g s, fs %g Hz (every %d steps), Hann window, segment %zu "
+              "(resolution %.4g Hz, ENBW %.4g Hz), overlap %g, %zu segments, %d realizations, %.1f s wall\n",
+              c.friction_coefficient, c.run.duration, transient, fs, k, s1.segment, s1.resolution, s1.enbw, w.overlap,
+              s1.segments, R, since(t0));
+  std::printf("# mesh frequency f_m = %.6g Hz\n", fm);
+  {
+    std::ofstream f = open_csv(o, "psd");
+    f << "frequency,delta_S1,force_S1";
+    if (R > 0) f << ",delta_mean,delta_mean_low,delta_mean_high,delta_run_low,delta_run_high,force_mean,force_mean_low,force_mean_high,force_run_low,force_run_high";
+    f << "\n";
+    gd::PsdBand bd, bf;
+    if (R > 0) {
+      bd = gd::psd_band(std::vector<gd::Psd>(pd.begin() + 1, pd.end()));
+      bf = gd::psd_band(std::vector<gd::Psd>(pf.begin() + 1, pf.end()));
+    }
+    for (std::size_t i = 0; i < s1.frequency.size(); ++i) {
+      f << s1.frequency[i] << "," << pd[0].density[i] << "," << pf[0].density[i];
+      if (R > 0)
+        f << "," << bd.mean[i] << "," << bd.mean_low[i] << "," << bd.mean_high[i] << "," << bd.run_low[i] << ","
+          << bd.run_high[i] << "," << bf.mean[i] << "," << bf.mean_low[i] << "," << bf.mean_high[i] << ","
+          << bf.run_low[i] << "," << bf.run_high[i];
+      f << "\n";
+    }
+    std::ofstream pk = open_csv(o, "peaks");
+    pk << "series,frequency,density,harmonic,offset,is_harmonic,prominence\n";
+    const int H = static_cast<int>(o.get("harmonics", 6));
+    const auto emit = [&](const std::string& name, const std::vector<double>& fr, const std::vector<double>& d) {
+      for (const auto& p : gd::mark_peaks(fr, d, fm, H, 8)) {
+        pk << name << "," << p.frequency << "," << p.density << "," << p.harmonic << "," << p.offset << ","
+           << (p.is_harmonic ? 1 : 0) << "," << p.prominence << "\n";
+        if (p.is_harmonic)
+          std::printf("%-12s harmonic %9.2f Hz  (%d f_m)  %.4g, prominence %.3g\n", name.c_str(), p.frequency,
+                      p.harmonic, p.density, p.prominence);
+        else
+          std::printf("%-12s peak     %9.2f Hz  (%d f_m %+8.2f Hz)  %.4g\n", name.c_str(), p.frequency, p.harmonic,
+                      p.offset, p.density);
+      }
+    };
+    emit("delta_S1", s1.frequency, pd[0].density);
+    emit("force_S1", s1.frequency, pf[0].density);
+    if (R > 0) {
+      emit("delta_mean", s1.frequency, bd.mean);
+      emit("force_mean", s1.frequency, bf.mean);
+    }
+    std::ofstream meta = open_csv(o, "spectrum_info");
+    meta << "mesh_frequency,sample_rate,resolution,enbw,segment,overlap,segments,realizations,transient,duration\n"
+         << fm << "," << fs << "," << s1.resolution << "," << s1.enbw << "," << s1.segment << "," << w.overlap << ","
+         << s1.segments << "," << R << "," << transient << "," << c.run.duration << "\n";
+  }
+  return 0;
+}
+
+// ---------------------------------------------------------------------------------------------
+int poincare(const Options& o) {
+  const gd::ModelConfig c = load_config(o, o.get("duration", 0));
+  const gd::GearPair g = gd::derive(c.gear);
+  const int P = static_cast<int>(o.get("phases", 64)), R = static_cast<int>(o.get("realizations", 0));
+  const double transient = o.get("transient", 0.2), h = c.run.time_step, Tm = gd::mesh_period(g);
+  const auto t0 = std::chrono::steady_clock::now();
+  // Phase ensemble (member 0 = S1 when phi0 = 0): GearLanes, one per phase, sampled at mesh phase 0,
+  // i.e. at t = (phi_n - phi0)/Omega mod T_m + k T_m (interpolated unless on the grid).
+  std::vector<std::vector<gd::PoincarePoint>> ph(P);
+  tbb::parallel_for(0, P, [&](int j) {
+    gd::GearInputs gi = c.gear;
+    gi.mesh_phase = j * g.mesh_period_angle / P;
+    gd::GearLanes sys({gd::GearLaneSpec{gi, c.friction_coefficient, c.load.initial_mean, c.initial}}, h);
+    const double offset = j == 0 ? 0.0 : (g.mesh_period_angle - gi.mesh_phase) / gi.pinion_speed;
+    ph[j] = gd::poincare_section(sys, {Tm, offset, transient, c.run.duration, {}});
+  });
+  std::vector<gd::PoincarePoint> st;
+  if (R > 0) {
+    std::vector<gd::LaneSpec> lanes;
+    for (int r = 0; r < R; ++r) lanes.push_back(gd::stochastic_lane(c, c.friction_coefficient, r));
+    gd::Ensemble e(g, h, c.initial, lanes, c.seed);
+    gd::EnsembleLanes sys(e);
+    st = gd::poincare_section(sys, {Tm, 0.0, transient, c.run.duration, {}});
+  }
+  std::ofstream f = open_csv(o, "poincare");
+  f << "set,run,phase0,k,t,delta,delta_dot,on_grid\n";
+  for (int j = 0; j < P; ++j)
+    for (const auto& p : ph[j])
+      f << (j == 0 ? "S1" : "phase") << "," << j << "," << j * g.mesh_period_angle / P << "," << p.k << "," << p.time
+        << "," << p.x[0] << "," << p.x[1] << "," << p.on_grid << "\n";
+  for (const auto& p : st)
+    f << "stochastic,r" << p.lane << ",0," << p.k << "," << p.time << "," << p.x[0] << "," << p.x[1] << "," << p.on_grid << "\n";
+  std::printf("# poincare: mesh period %.6g s (%s), transient %g s, T %g s, %d phases, %d realizations, %.1f s wall\n",
+              Tm, gd::on_step_grid(Tm, h) ? "a whole number of steps: grid states" : "interpolated", transient,
+              c.run.duration, P, R, since(t0));
+  const int period = gd::detect_period(ph[0], 16, {1e-3 * g.in.backlash, 1e-3 * std::sqrt(2 * c.load.initial_mean * g.in.backlash)});
+  std::printf("S1: %zu points, %s\n", ph[0].size(), period > 0 ? ("period " + std::to_string(period)).c_str() : "no period <= 16 (aperiodic)");
+  return 0;
+}
+
+// ---------------------------------------------------------------------------------------------
+int bifurcation(const Options& o) {
+  const gd::ModelConfig c = load_config(o, 0);
+  const gd::ScanParameter p = gd::parse_scan_parameter(o.str("parameter", "speed"));
+  const std::vector<double> values = value_list(o);
+  gd::ScanOptions so;
+  so.duration = o.get("duration", 2.0);
+  so.transient = o.get("transient", 1.0);
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto r = gd::bifurcation_scan(c, p, values, so);
+  const double wall = since(t0);
+  std::ofstream f = open_csv(o, "bifurcation");
+  f << "value,k,t,delta,delta_dot\n";
+  for (const auto& v : r)
+    for (const auto& q : v.points) f << v.value << "," << q.k << "," << q.time << "," << q.x[0] << "," << q.x[1] << "\n";
+  std::ofstream s = open_csv(o, "bifurcation_summary");
+  s << "parameter,value,period,regime,min_gap,min_delta,points\n";
+  std::map<std::string, int> count;
+  for (const auto& v : r) {
+    s << gd::scan_parameter_name(p) << "," << v.value << "," << v.period << ",\"" << v.regime << "\"," << v.min_gap << ","
+      << v.min_delta << "," << v.points.size() << "\n";
+    ++count[v.regime];
+  }
+  std::printf("# bifurcation over %s: %zu values %g..%g%s, %g s each (transient %g s), mu %g, %.1f s wall\n",
+              gd::scan_parameter_name(p).c_str(), values.size(), values.front(), values.back(), o.log ? " (log)" : "",
+              so.duration, so.transient, c.friction_coefficient, wall);
+  // Ranges of equal regime.
+  std::size_t i = 0;
+  while (i < r.size()) {
+    std::size_t j = i;
+    while (j + 1 < r.size() && r[j + 1].regime == r[i].regime) ++j;
+    std::printf("  %-10g .. %-10g %s (%zu values)\n", r[i].value, r[j].value, r[i].regime.c_str(), j - i + 1);
+    i = j + 1;
+  }
+  return 0;
+}
+
+// ---------------------------------------------------------------------------------------------
+int lyapunov(const Options& o) {
+  gd::ModelConfig c = load_config(o, 0);
+  const int M = static_cast<int>(o.get("step-divisor", 1));
+  const double h = c.run.time_step / M;
+  const double b = c.gear.backlash;
+  gd::LyapunovOptions lo;
+  lo.transient = o.get("transient", 0.2);
+  lo.duration = o.get("duration", 1.2) - lo.transient;
+  lo.renormalise_every = static_cast<std::int64_t>(o.get("renormalise", 100)) * M;
+  lo.separation = o.get("separation", 1e-8);
+  lo.record_every = 10;
+  const bool scan = o.kv.count("parameter") > 0;
+  std::vector<double> values;
+  std::vector<gd::GearLaneSpec> specs;
+  gd::ScanParameter p = gd::ScanParameter::Speed;
+  if (scan) {
+    p = gd::parse_scan_parameter(o.str("parameter", "speed"));
+    values = value_list(o);
+    for (double v : values) {
+      const gd::ModelConfig cv = gd::with_parameter(c, p, v);
+      specs.push_back({cv.gear, cv.friction_coefficient, cv.load.initial_mean, cv.initial});
+    }
+  } else {
+    const int P = static_cast<int>(o.get("phases", 64));
+    const gd::GearPair g = gd::derive(c.gear);
+    for (int j = 0; j < P; ++j) {
+      gd::GearInputs gi = c.gear;
+      gi.mesh_phase = j * g.mesh_period_angle / P;
+      values.push_back(gi.mesh_phase);
+      specs.push_back({gi, c.friction_coefficient, c.load.initial_mean, c.initial});
+    }
+  }
+  const int n = static_cast<int>(specs.size());
+  std::vector<gd::LyapunovResult> res(n);
+  const auto t0 = std::chrono::steady_clock::now();
+  const int per = 4;
+  tbb::parallel_for(0, (n + per - 1) / per, [&](int blk) {
+    std::vector<gd::GearLaneSpec> lanes;
+    std::vector<double> scale;
+    for (int i = blk * per; i < std::min(n, blk * per + per); ++i) {
+      lanes.push_back(specs[i]);
+      lanes.push_back(specs[i]);
+    }
+    gd::GearLanes sys(lanes, h);
+    gd::LyapunovOptions l = lo;
+    l.scale = {b, std::sqrt(2.0 * std::abs(c.load.initial_mean) * b)};
+    const auto r = gd::largest_lyapunov(sys, l);
+    for (std::size_t k = 0; k < r.size(); ++k) res[blk * per + k] = r[k];
+  });
+  const double wall = since(t0);
+  std::ofstream f = open_csv(o, "lyapunov");
+  f << (scan ? gd::scan_parameter_name(p) : std::string("phase0")) << ",exponent,max_log_growth,min_log_growth,intervals\n";
+  std::vector<double> ex;
+  for (int i = 0; i < n; ++i) {
+    f << values[i] << "," << res[i].exponent << "," << res[i].max_log_growth << "," << res[i].min_log_growth << ","
+      << res[i].intervals << "\n";
+    ex.push_back(res[i].exponent);
+  }
+  std::ofstream fr = open_csv(o, "lyapunov_running");
+  fr << "id,value,t,running\n";
+  for (int i = 0; i < n; ++i)
+    for (std::size_t k = 0; k < res[i].time.size(); ++k)
+      fr << i << "," << values[i] << "," << res[i].time[k] << "," << res[i].running[k] << "\n";
+  const gd::BoxStats bs = gd::box_stats(ex);
+  double gmax = -1e300, gmin = 1e300;
+  for (const auto& r : res) { gmax = std::max(gmax, r.max_log_growth); gmin = std::min(gmin, r.min_log_growth); }
+  std::printf("# lyapunov: h %g s, transient %g s, averaged over %g s, renormalised every %lld steps (%g s), d0 %g "
+              "(units b = %g m, v_ref = %g m/s), mu %g, %d %s, %.1f s wall\n",
+              h, lo.transient, lo.duration, static_cast<long long>(lo.renormalise_every), lo.renormalise_every * h,
+              lo.separation, b, std::sqrt(2.0 * c.load.initial_mean * b), c.friction_coefficient, n,
+              scan ? "values" : "phases", wall);
+  std::printf("largest exponent [1/s]: median %.4g, 95%% interval of the median [%.4g, %.4g], min %.4g, Q1 %.4g, Q3 %.4g, max %.4g\n",
+              bs.median, bs.median_low, bs.median_high, bs.min, bs.q1, bs.q3, bs.max);
+  std::printf("ln(d/d0) per renormalisation interval: min %.3g, max %.3g\n", gmin, gmax);
+  return 0;
+}
+
+// ---------------------------------------------------------------------------------------------
+gd::Interval interval_mm(const std::string& s, double scale) {
+  const auto comma = s.find(',');
+  if (comma == std::string::npos) throw std::runtime_error("an interval is LO,HI, got '" + s + "'");
+  return {std::stod(s.substr(0, comma)) * scale, std::stod(s.substr(comma + 1)) * scale};
+}
+
+int safety(const Options& o) {
+  const gd::ModelConfig c = load_config(o, o.get("duration", 0));
+  const gd::GearPair g = gd::derive(c.gear);
+  const int R = static_cast<int>(o.get("realizations", 100));
+  const std::int64_t every = static_cast<std::int64_t>(o.get("record-every", 1000));
+  const double settle = o.get("settle", 0.3), h = c.run.time_step;
+  const gd::Interval di = interval_mm(o.str("delta-interval", "0.040,0.055"), 1e-3);
+  const gd::Interval vi = interval_mm(o.str("velocity-interval", "-16,16"), 1e-3);
+  if (R < 2) throw std::runtime_error("--realizations must be >= 2");
+  gd::RecordedRuns runs;
+  runs.delta.assign(R, {});
+  runs.velocity.assign(R, {});
+  const std::int64_t N = c.run.steps();
+  for (std::int64_t n = 0; n <= N; n += every) runs.time.push_back(n * h);
+  const auto t0 = std::chrono::steady_clock::now();
+  const int per = 16;
+  tbb::parallel_for(0, (R + per - 1) / per, [&](int blk) {
+    std::vector<gd::LaneSpec> lanes;
+    for (int r = blk * per; r < std::min(R, blk * per + per); ++r)
+      lanes.push_back(gd::stochastic_lane(c, c.friction_coefficient, r));
+    gd::Ensemble e(g, h, c.initial, lanes, c.seed);
+    for (std::int64_t n = 0; n <= N; ++n) {
+      if (n % every == 0)
+        for (int l = 0; l < e.lanes(); ++l) {
+          runs.delta[blk * per + l].push_back(e.delta()[l]);
+          runs.velocity[blk * per + l].push_back(e.velocity()[l]);
+        }
+      if (n < N) e.step();
+    }
+  });
+  const double wall = since(t0);
+  const auto s = gd::safety_over_time(runs, di, vi);
+  std::ofstream f = open_csv(o, "safety");
+  f << "t,joint,joint_low,joint_high,delta,delta_low,delta_high,velocity,velocity_low,velocity_high\n";
+  for (std::size_t j = 0; j < s.time.size(); ++j)
+    f << s.time[j] << "," << s.joint[j].estimate << "," << s.joint[j].low << "," << s.joint[j].high << ","
+      << s.delta_only[j].estimate << "," << s.delta_only[j].low << "," << s.delta_only[j].high << ","
+      << s.velocity_only[j].estimate << "," << s.velocity_only[j].low << "," << s.velocity_only[j].high << "\n";
+  const auto fp = gd::first_passage(runs, di, vi, settle);
+  std::ofstream fpf = open_csv(o, "first_passage");
+  fpf << "run,time,event\n";
+  std::size_t events = 0;
+  for (int r = 0; r < R; ++r) {
+    fpf << r << "," << fp.time[r] << "," << fp.event[r] << "\n";
+    events += fp.event[r];
+  }
+  const auto km = gd::kaplan_meier(fp.time, fp.event);
+  std::ofstream kf = open_csv(o, "survival");
+  kf << "t,survival,low,high,at_risk,events\n";
+  kf << settle << ",1,1,1," << R << ",0\n";
+  for (std::size_t i = 0; i < km.time.size(); ++i)
+    kf << km.time[i] << "," << km.survival[i] << "," << km.low[i] << "," << km.high[i] << "," << km.at_risk[i] << ","
+       << km.events[i] << "\n";
+  // The curve ends at the last recorded time (censoring), with the last values.
+  if (!km.time.empty() && km.time.back() < runs.time.back())
+    kf << runs.time.back() << "," << km.survival.back() << "," << km.low.back() << "," << km.high.back() << ",0,0\n";
+  // PDFs at T: histogram (doc/model.md §8 edges) and KDE with Silverman's bandwidth.
+  std::ofstream pf = open_csv(o, "pdf");
+  pf << "variable,x,histogram,kde,bandwidth\n";
+  const auto pdf = [&](const std::string& name, const std::vector<double>& x, double lo, double hi, double width) {
+    const double bw = gd::silverman_bandwidth(x);
+    std::vector<double> grid;
+    for (double v = lo; v <= hi + 1e-12 * std::abs(hi); v += width / 8) grid.push_back(v);
+    const auto kde = gd::gaussian_kde(x, grid, bw);
+    const gd::BinSpec spec{lo, hi, width};
+    const gd::Histogram hist = gd::histogram(x, spec);
+    for (std::size_t i = 0; i < grid.size(); ++i) {
+      const std::size_t bin = std::min<std::size_t>(hist.counts.size() - 1, static_cast<std::size_t>((grid[i] - lo) / width));
+      pf << name << "," << grid[i] << "," << hist.density(bin) << "," << kde[i] << "," << bw << "\n";
+    }
+    return bw;
+  };
+  std::vector<double> dT, vT;
+  for (int r = 0; r < R; ++r) { dT.push_back(runs.delta[r].back()); vT.push_back(runs.velocity[r].back()); }
+  const double bwd = pdf("delta", dT, 0.030e-3, 0.060e-3, 0.0005e-3), bwv = pdf("delta_dot", vT, -0.040, 0.040, 0.002);
+  std::printf("# safety: %d realizations, mu %g, T %g s, recorded every %lld steps, delta in [%g, %g] m, delta_dot in [%g, %g] m/s, %.1f s wall\n",
+              R, c.friction_coefficient, c.run.duration, static_cast<long long>(every), di.lo, di.hi, vi.lo, vi.hi, wall);
+  std::printf("P(safe at T) = %.3f [%.3f, %.3f]; first passage after %g s: %zu of %d runs left the safe set; "
+              "KM S(T) = %.3f; KDE bandwidths (Silverman) %.3g m, %.3g m/s\n",
+              s.joint.back().estimate, s.joint.back().low, s.joint.back().high, settle, events, R,
+              km.survival.empty() ? 1.0 : km.survival.back(), bwd, bwv);
+  return 0;
+}
+
+void draw(const Options& o) {
+  namespace fs = std::filesystem;
+  const fs::path script = fs::path(config_dir()).parent_path() / "scripts" / "plot_dynamics.py";
+  if (!fs::exists(script)) throw std::runtime_error("--png: cannot find " + script.string());
+  const std::string cmd = "/usr/bin/python3 '" + script.string() + "' " + o.command + " '" + o.output + "'";
+  if (std::system(cmd.c_str()) != 0) throw std::runtime_error("--png: '" + cmd + "' failed");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+  const Options o = parse(argc, argv);
+  int rc = 0;
+  if (o.command == "spectrum") rc = spectrum(o);
+  else if (o.command == "poincare") rc = poincare(o);
+  else if (o.command == "bifurcation") rc = bifurcation(o);
+  else if (o.command == "lyapunov") rc = lyapunov(o);
+  else if (o.command == "safety") rc = safety(o);
+  else throw std::runtime_error("unknown subcommand '" + o.command + "' (gear_analyze --help)");
+  if (rc == 0 && o.png) draw(o);
+  return rc;
+} catch (const std::exception& e) {
+  std::cerr << "gear_analyze: " << e.what() << "\n";
+  return 1;
+}
