@@ -30,4 +30,6 @@ echo
 catkin_test_results --verbose "$GD_WS/build/test_results" || status=1
 # The fault suite's table: cases tried and passed per category (test/faults/summary.py).
 /usr/bin/python3 "$GD_REPO/test/faults/summary.py" "$GD_WS/build/test_results" || status=1
+# What failed, by name, at the end of the log where CI shows it.
+/usr/bin/python3 "$GD_REPO/test/list_failures.py" "$GD_WS/build/test_results"
 exit $status
