@@ -92,16 +92,16 @@ def live(work):
          "t_end:=%r" % T_END, "real_time_factor:=0", "output:=log"],
         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
     record = subprocess.Popen(["rosbag", "record", "-O", plain, "__name:=plain_record"] +
-                              ["/" + t for t in LIVE_TOPICS],
+                              ["/gear/" + t for t in LIVE_TOPICS],
                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
     try:
         rospy.init_node("foxglove_test", anonymous=True, disable_signals=True)
-        state = Collector("/state", GearState)
+        state = Collector("/gear/state", GearState)
         state.wait_connected(30.0)
-        # Both recorders and this script listen before the run starts.
-        wait_until(lambda: all(outbound_connections("/gear_simulator", "/" + t) >= (3 if t == "state" else 2)
-                               for t in LIVE_TOPICS), 30.0, "both rosbag records to subscribe")
-        srv = services("/gear_simulator")
+        # rosbag record and this script listen before the run starts (record:=true writes in-process).
+        wait_until(lambda: all(outbound_connections("/gear/gear_simulator", "/gear/" + t) >= (2 if t == "state" else 1)
+                               for t in LIVE_TOPICS), 30.0, "rosbag record to subscribe")
+        srv = services("/gear/gear_simulator")
         srv["reset"]()
         srv["unpause"]()
         state.wait_for(ends_at(T_END), 30.0, "t_end")
@@ -118,7 +118,7 @@ def live(work):
             except subprocess.TimeoutExpired:
                 os.killpg(p.pid, signal.SIGKILL)
                 p.wait()
-    launched = glob.glob(os.path.join(launch_dir, "gear_simulator_*.bag"))
+    launched = glob.glob(os.path.join(launch_dir, "gear_*.bag"))
     assert len(launched) == 1, "record:=true left %s" % os.listdir(launch_dir)
     assert os.path.exists(plain), "rosbag record left no %s (%s)" % (plain, os.listdir(work))
     return launched, [plain]

@@ -10,7 +10,7 @@
                  the machine's user with getpass.getuser() and takes a local address with another
                  user as remote). The node must run under sshd, started by scripts/remote_env.sh.
 
-Each: the node registers, one run of t_end is published on /state and the launch stops on SIGINT.
+Each: the node registers, one run of t_end is published on /gear/state and the launch stops on SIGINT.
 ssh_machine is skipped (reason printed) only where sshd is not installed (scripts/test.sh installs
 openssh-server). Nothing the test starts is left running.
 usage: remote_test.py [JUNIT.xml]"""
@@ -69,26 +69,26 @@ def one_run(log_path):
     import rospy
     from gear_dynamics.msg import GearState
     from simtest import Collector, ends_at, services, wait_until
-    state = Collector("/state", GearState)
+    state = Collector("/gear/state", GearState)
     master = rosgraph.Master("/remote_test")
 
     def registered():
         try:
-            master.lookupNode("/gear_simulator")
+            master.lookupNode("/gear/gear_simulator")
             return True
         except Exception:
             return False
     try:
-        wait_until(registered, 60.0, "/gear_simulator to register")
+        wait_until(registered, 60.0, "/gear/gear_simulator to register")
     except AssertionError as e:
         with open(log_path) as f:
             raise AssertionError("%s; roslaunch said:\n%s" % (e, f.read()[-3000:]))
     state.wait_connected(30.0)
-    srv = services("/gear_simulator")
+    srv = services("/gear/gear_simulator")
     srv["reset"]()
     srv["unpause"]()
     msgs = state.wait_for(ends_at(T_END), 30.0, "t_end")
-    uri = master.lookupNode("/gear_simulator")
+    uri = master.lookupNode("/gear/gear_simulator")
     _, _, pid = xmlrpc.client.ServerProxy(uri).getPid("/remote_test")
     state.clear()
     rospy.loginfo("remote_test: %d states", len(msgs))
@@ -120,11 +120,11 @@ def wait_unregistered():
 
     def gone():
         try:
-            master.lookupNode("/gear_simulator")
+            master.lookupNode("/gear/gear_simulator")
             return False
         except Exception:
             return True
-    wait_until(gone, 20.0, "/gear_simulator to unregister")
+    wait_until(gone, 20.0, "/gear/gear_simulator to unregister")
 
 
 def local_case(work):
