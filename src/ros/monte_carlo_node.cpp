@@ -64,7 +64,12 @@ int MonteCarloNode::run() {
            model_.run.time_step, batch_threads(settings_), settings_.block_lanes);
   total_steps_ = static_cast<std::int64_t>(todo_.size()) * static_cast<std::int64_t>(steps);
   start_ = std::chrono::steady_clock::now();
-  write_manifest(study_, settings_, runs_, todo_.empty());
+  try {
+    write_manifest(study_, settings_, runs_, todo_.empty());
+  } catch (const std::exception& e) {  // e.g. the folder became unwritable since init()
+    ROS_FATAL("gear_monte_carlo: %s", e.what());
+    return 1;
+  }
 
   BagSink sink(study_, settings_.output_dir);
   publish(sink, false);  // the totals at once, for rostopic echo

@@ -7,8 +7,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <iostream>
+#include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -55,8 +56,8 @@ Summary lines use the paper's units: mm, mm/s, mm s^-1/2.
 struct Options {
   std::vector<std::string> files;
   std::vector<std::string> sets;
-  double mu = -1.0;
-  long long seed = -1;
+  std::optional<double> mu;      // --mu, else the configuration's
+  std::optional<long long> seed;  // --seed, else the configuration's
   int realizations = 2;
   bool deterministic = true;
   double rate = 1000.0;
@@ -172,8 +173,9 @@ int main(int argc, char** argv) try {
   files.insert(files.end(), opt.files.begin(), opt.files.end());
   YAML::Node root = gd::read_yaml_files(files);
   for (const auto& s : opt.sets) apply_set(root, s);
-  if (opt.mu >= 0) root["gear_pair"]["friction_coefficient"] = opt.mu;
-  if (opt.seed >= 0) root["run"]["seed"] = opt.seed;
+  // Validated with the rest: a negative value is refused by name, not ignored.
+  if (opt.mu) root["gear_pair"]["friction_coefficient"] = *opt.mu;
+  if (opt.seed) root["run"]["seed"] = *opt.seed;
   if (opt.check_simulator) {
     try {
       const gd::ModelConfig model = gd::parse_config(root);

@@ -145,6 +145,15 @@ class MonteCarloNode(unittest.TestCase):
         self.assertIn('monte_carlo.record_rate = 30000 Hz does not fit the grid', output)
         self.assertFalse(os.path.exists(os.path.join(self.folder('bad'), 'manifest.yaml')))
 
+    def test_4_gear_run_refuses_negative_options(self):
+        # --mu and --seed go through the same validation as the files (they were once ignored when < 0).
+        for option, value, message in (('--mu', '-0.1', 'gear_pair.friction_coefficient = -0.1 is out of range'),
+                                       ('--seed', '-4', 'run.seed = -4 is out of range')):
+            res = subprocess.run(['rosrun', 'gear_dynamics', 'gear_run', option, value, '--rate', '0'],
+                                 stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+            self.assertEqual(res.returncode, 1, res.stdout)
+            self.assertIn(message, res.stdout)
+
 
 if __name__ == '__main__':
     rostest.rosrun('gear_dynamics', 'test_monte_carlo', MonteCarloNode)
