@@ -47,6 +47,7 @@ struct Manifest {
   std::vector<std::vector<double>> points;  // format 2: each point's value on every axis
   std::vector<std::string> point_keys;      // format 2: config_key of each point
   std::string grid;                         // format 2: axes and points as text, to compare manifests
+  std::string content;                      // config.monte_carlo (what the batch holds) as text
 };
 
 // Why a bag is not used.
@@ -100,6 +101,11 @@ Manifest parse_manifest(const fs::path& path) {
       fail(std::string("its config is not a valid model configuration: ") + ex.what());
     }
     m.config_key = config_key(m.config);
+    if (root["config"]["monte_carlo"]) {
+      YAML::Emitter e;
+      e << YAML::Flow << root["config"]["monte_carlo"];
+      m.content = e.c_str();
+    }
     if (m.study) {
       m.axes = root["axes"].as<std::vector<std::string>>();
       if (m.axes.empty() || m.axes.front() != kFrictionKey) fail("axes must start with " + std::string(kFrictionKey));
@@ -449,6 +455,10 @@ BatchInputs read_batches(const std::vector<std::string>& folder_args, const Read
       throw BatchReadError("manifests " + manifests.front().path.string() + " and " + m.path.string() +
                            " belong to different batches: their configurations differ at " +
                            first_difference(manifests.front().config_key, m.config_key));
+    if (m.content != manifests.front().content)
+      throw BatchReadError("manifests " + manifests.front().path.string() + " and " + m.path.string() +
+                           " belong to different batches: their monte_carlo sections differ (" +
+                           manifests.front().content + " vs " + m.content + ")");
     shards[m.shard_count].insert(m.shard_index);
     for (const ManifestRun& e : m.runs) {
       const auto [it, inserted] = listed.emplace(e.name, std::make_pair(e, &m));

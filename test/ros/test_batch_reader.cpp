@@ -98,12 +98,12 @@ void write_bag(const fs::path& file, const RunSpec& r, const gd::ModelConfig& co
 }
 
 void write_manifest(const fs::path& file, const std::vector<RunSpec>& runs, const gd::ModelConfig& config, int shard,
-                    int shards) {
+                    int shards, int realizations = 6) {
   YAML::Node root;
   root["format"] = gd::kManifestFormat;
   root["package_version"] = GEAR_DYNAMICS_VERSION;
   root["config"] = gd::to_yaml(config);
-  root["config"]["monte_carlo"]["realizations"] = 6;
+  root["config"]["monte_carlo"]["realizations"] = realizations;
   root["shard_index"] = shard;
   root["shard_count"] = shards;
   root["runs"] = YAML::Node(YAML::NodeType::Sequence);
@@ -336,6 +336,15 @@ TEST_F(BatchReader, ShardsMergeIntoTheSingleBatch) {
   const gd::BatchInputs half = gd::read_batches({(root_ / "s0").string()});
   ASSERT_EQ(half.missing.size(), 1u);
   EXPECT_HAS(half.missing[0], "shard 1 of 2");
+  // Shards of two batches that hold different runs (here R) are refused, not merged.
+  write_batch(root_ / "other", shard[1], config_, 1, 2);
+  write_manifest(root_ / "other" / "manifest.yaml", shard[1], config_, 1, 2, 7);
+  try {
+    gd::read_batches({(root_ / "s0").string(), (root_ / "other").string()});
+    ADD_FAILURE() << "shards of different batches were merged";
+  } catch (const gd::BatchReadError& ex) {
+    EXPECT_HAS(std::string(ex.what()), "their monte_carlo sections differ");
+  }
   // The same runs twice: the second copies are skipped as duplicates, not read.
   const gd::BatchInputs twice = gd::read_batches({(root_ / "single").string(), (root_ / "both").string()});
   EXPECT_EQ(twice.runs.size(), runs.size());
