@@ -1,4 +1,4 @@
-// The live simulation without ROS (doc/live-node-notes.md): one realization of the gear model
+// The live simulation without ROS (doc/gear_simulator.md §13): one realization of the gear model
 // (doc/model.md) stepped in simulated time, paced by wall time against a real-time factor, with
 // run-time requests (mu, sigma, lambda, real_time_factor, publish_rate, pause, reset, step) handed
 // over from other threads and applied between two steps at the next publish instant, an optional
