@@ -1,4 +1,4 @@
-// gear_simulator: the live simulator node (see gear_dynamics/ros/gear_simulator.hpp and the README).
+// gear_simulator: the live simulator node (see gear_dynamics/ros/gear_simulator.hpp and doc/gear_simulator.md).
 #include <ros/ros.h>
 
 #include "gear_dynamics/ros/gear_simulator.hpp"

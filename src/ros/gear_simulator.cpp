@@ -46,7 +46,7 @@ std::vector<std::pair<std::string, double SimulatorConfig::*>> double_parameters
 
 }  // namespace
 
-void ClampLoggedConfig::__clamp__() {
+void RefusingConfig::__clamp__() {
   // One rule for a bad value, at start and at run time: refused. At start the node ends with a
   // FATAL (ConfigError); here the value in effect stays (NaN marks it for reconfigure()).
   for (const auto& [name, field] : double_parameters()) {
@@ -99,7 +99,7 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
   dynamic_.publish_rate = settings_.publish_rate;
   reconfigure_server_.updateConfig(dynamic_);
   reconfigure_server_.setCallback(
-      [this](ClampLoggedConfig& config, uint32_t level) { reconfigure(config, level); });
+      [this](RefusingConfig& config, uint32_t level) { reconfigure(config, level); });
 
   updater_.setHardwareID("none");
   updater_.add("simulation", this, &GearSimulator::diagnose);
@@ -191,8 +191,12 @@ void GearSimulator::reconfigure(SimulatorConfig& config, uint32_t /*level*/) {
     ROS_WARN("dynamic_reconfigure: %s = nan or out of range: refused, keeping %g", name.c_str(), dynamic_.*field);
     config.*field = dynamic_.*field;
   }
-  if (settings_.deterministic && (config.sigma != 0.0 || config.lambda != 0.0)) {
-    ROS_WARN("sigma and lambda stay 0 with the deterministic load (simulator.deterministic: true)");
+  // The server answers with `config`: it must show what is in effect, so a refused value is undone here.
+  const bool no_noise = settings_.deterministic || settings_.load_input == "external";
+  if (no_noise && (config.sigma != 0.0 || config.lambda != 0.0)) {
+    ROS_WARN("sigma and lambda stay 0 with %s", settings_.deterministic
+                                                    ? "the deterministic load (simulator.deterministic: true)"
+                                                    : "the external load (simulator.load_input: external)");
     config.sigma = 0.0;
     config.lambda = 0.0;
   }

@@ -28,12 +28,12 @@
 
 namespace gear_dynamics {
 
-// The reconfigure server clamps every request into Simulator.cfg's ranges, silently; with this
-// Config it logs each value the clamp changes. NaN passes the clamp (comparisons with NaN are
-// false): GearSimulator::reconfigure keeps the value in effect instead.
-struct ClampLoggedConfig : SimulatorConfig {
-  ClampLoggedConfig() = default;
-  ClampLoggedConfig(const SimulatorConfig& c) : SimulatorConfig(c) {}  // the server converts its defaults
+// The reconfigure server would clamp every request into Simulator.cfg's ranges, silently; with
+// this Config a value out of range (or NaN) is refused with a warning instead, as at start:
+// __clamp__ marks it NaN and GearSimulator::reconfigure keeps the value in effect.
+struct RefusingConfig : SimulatorConfig {
+  RefusingConfig() = default;
+  RefusingConfig(const SimulatorConfig& c) : SimulatorConfig(c) {}  // the server converts its defaults
   void __clamp__();
 };
 
@@ -124,7 +124,7 @@ class GearSimulator : private LiveSink {
   ros::Subscriber load_sub_;
   ros::ServiceServer pause_srv_, unpause_srv_, reset_srv_, step_srv_;
   boost::recursive_mutex reconfigure_mutex_;
-  dynamic_reconfigure::Server<ClampLoggedConfig> reconfigure_server_;
+  dynamic_reconfigure::Server<RefusingConfig> reconfigure_server_;
   diagnostic_updater::Updater updater_;
   ros::WallTimer diagnostics_timer_;
 
