@@ -91,7 +91,7 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
   step_srv_ = private_nh_.advertiseService("step", &GearSimulator::step, this);
 
   // The first callback gets the values loaded from YAML, not the .cfg defaults.
-  const LaneSpec& lane = sim_->ensemble().lane(0);
+  const LaneSpec& lane = sim_->realization().lane();
   dynamic_.mu = lane.mu;
   dynamic_.sigma = lane.sigma;
   dynamic_.lambda = lane.drift;

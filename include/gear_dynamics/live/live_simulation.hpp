@@ -22,6 +22,7 @@
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/config/simulator_settings.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
+#include "gear_dynamics/engine/realization.hpp"
 #include "gear_dynamics/engine/observers.hpp"
 
 namespace gear_dynamics {
@@ -163,7 +164,8 @@ class LiveSimulation {
   Outcome last_outcome() const;
 
   // ---- the stepping loop's own view (read it from the stepping thread or between iterate()) ----
-  const Ensemble& ensemble() const { return ensemble_; }
+  // The one realization, stepped by the one-lane path (bit for bit its path in a batch block).
+  const Realization& realization() const { return realization_; }
   std::int64_t period_steps() const { return period_; }
   std::int64_t end_step() const { return end_step_; }
   bool paused() const { return paused_; }
@@ -200,7 +202,7 @@ class LiveSimulation {
   const std::int64_t end_step_;  // 0 = run on forever
 
   // Owned by the stepping loop.
-  Ensemble ensemble_;
+  Realization realization_;
   double real_time_factor_, publish_rate_;
   std::int64_t period_;  // grid steps per publish period
   WindowRange window_;   // trailing-window ranges for the center distance d(t)
