@@ -1,6 +1,7 @@
 #include "gear_dynamics/engine/observers.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 
@@ -96,6 +97,22 @@ Eigen::ArrayXd WindowRange::velocity_range() const {
 
 Eigen::ArrayXd WindowRange::center_distance() const {
   return (delta_range() * velocity_range()).sqrt();
+}
+
+double WindowRange::center_distance(int lane) const {
+  if (last_ < 0) return std::sqrt(0.0 * 0.0);
+  // reduce() and the ranges for one lane: the same maxima, sums and product in the same order.
+  const Eigen::Index col = static_cast<Eigen::Index>(block_index_ - segment_index_ * segment_);
+  const std::int64_t first = block_index_ - (segment_ - 1);
+  const bool suffix = first < segment_index_ * segment_;
+  const Eigen::Index scol = suffix ? static_cast<Eigen::Index>(first - (segment_index_ - 1) * segment_) : 0;
+  double m[4];
+  for (int k = 0; k < 4; ++k) {
+    const Eigen::Index row = k * lanes_ + lane;
+    m[k] = std::max(prefix_[row], blocks_(row, col));
+    if (suffix) m[k] = std::max(m[k], suffix_(row, scol));
+  }
+  return std::sqrt((m[0] + m[1]) * (m[2] + m[3]));
 }
 
 SteadyStateTime::SteadyStateTime(int lanes, double backlash, double tolerance)

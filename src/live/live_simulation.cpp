@@ -202,6 +202,8 @@ LiveSimulation::Next LiveSimulation::iterate() {
 }
 
 LiveSimulation::Outcome LiveSimulation::apply(const Request& r) {
+  if (!r.mu && !r.sigma && !r.drift && !r.real_time_factor && !r.publish_rate && !r.paused && !r.reset && !r.step)
+    return Outcome{};  // the usual case: nothing asked
   const double t = realization_.time();
   const auto n = static_cast<long long>(realization_.step_index());
   const auto changed = [&](const char* name, double from, double to, const char* unit) {
@@ -255,24 +257,25 @@ LiveSimulation::Outcome LiveSimulation::apply(const Request& r) {
     log(LiveLogLevel::Warn, why);
     out = Outcome{false, why};
   };
-  const std::string at_end = "the run is at t_end = " + seconds(settings_.t_end) + "; call ~reset to run again";
-  const std::string blew_up = "the run diverged (" + divergence_ + "); call ~reset to start over";
+  // Built only when refused: apply() runs at every publish instant, mostly with nothing to apply.
+  const auto at_end = [&] { return "the run is at t_end = " + seconds(settings_.t_end) + "; call ~reset to run again"; };
+  const auto blew_up = [&] { return "the run diverged (" + divergence_ + "); call ~reset to start over"; };
   if (q.paused) {
     if (*q.paused) {
       if (!paused_) log(LiveLogLevel::Info, format("paused at t = %.9g s", realization_.time()));
       paused_ = true;
     } else if (diverged_) {
-      refuse(blew_up);
+      refuse(blew_up());
     } else if (finished_) {
-      refuse(at_end);
+      refuse(at_end());
     } else {
       if (paused_) log(LiveLogLevel::Info, format("running from t = %.9g s", realization_.time()));
       paused_ = false;
     }
   }
   if (q.step) {
-    if (diverged_) refuse(blew_up);
-    else if (finished_) refuse(at_end);
+    if (diverged_) refuse(blew_up());
+    else if (finished_) refuse(at_end());
     else if (!paused_) refuse("~step works while paused; call ~pause first");
   }
   return out;
@@ -378,7 +381,7 @@ LiveSample LiveSimulation::sample() const {
 
 void LiveSimulation::publish() {
   LiveSample s = sample();
-  if (sink_.wants_center_distance()) s.center_distance = window_.center_distance()[0];
+  if (sink_.wants_center_distance()) s.center_distance = window_.center_distance(0);
   if (!std::isfinite(s.delta) || !std::isfinite(s.delta_dot) || !std::isfinite(s.phi) ||
       !std::isfinite(s.center_distance)) {
     diverge("non-finite state at t = " + seconds(s.t) + ": delta = " + std::to_string(s.delta) +

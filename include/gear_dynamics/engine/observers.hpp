@@ -33,6 +33,7 @@ class WindowRange {
   Eigen::ArrayXd delta_range() const;
   Eigen::ArrayXd velocity_range() const;
   Eigen::ArrayXd center_distance() const;  // [m s^-1/2] in SI
+  double center_distance(int lane) const;  // the same for one lane, without allocating
 
   std::int64_t block_steps() const { return block_; }
   int capacity_blocks() const { return static_cast<int>(segment_); }
