@@ -149,6 +149,7 @@ void LiveSimulation::loop() {
   while (!stop_) {
     const auto start = std::chrono::steady_clock::now();
     const Next next = iterate();
+    if (!next.running || next.until) sink_.flush();  // about to wait
     std::unique_lock<std::mutex> lock(mutex_);
     if (next.running) {
       if (next.until) wake_.wait_until(lock, *next.until, [&] { return has_pending_ || stop_; });
@@ -161,6 +162,7 @@ void LiveSimulation::loop() {
       wake_.wait_for(lock, kIdlePeriod, [&] { return has_pending_ || stop_; });
     }
   }
+  sink_.flush();
 }
 
 LiveSimulation::Next LiveSimulation::iterate() {
