@@ -12,6 +12,10 @@
 
 #include "gear_dynamics/model/mesh_schedule.hpp"
 
+// The kernel is inlined into each stepping loop (GCC otherwise calls the packet version once per
+// packet, with d and v through memory: 4 % slower).
+#define GD_KERNEL_INLINE inline __attribute__((always_inline))
+
 namespace gear_dynamics::kernel {
 
 // min(max(d, -b), b) and |x| at either width. Eigen's packet max/min pass their operands to the
@@ -29,7 +33,7 @@ inline Eigen::Array<double, N, 1> magnitude(const Eigen::Array<double, N, 1>& x)
 
 // Eq. 15 with doc/model.md D1/D2: backlash in stiffness and damping, Hunt-Crossley |g|.
 template <class P>
-inline P acceleration(const P& d, const P& v, const P& load, double stiffness, const P& q, double b,
+GD_KERNEL_INLINE P acceleration(const P& d, const P& v, const P& load, double stiffness, const P& q, double b,
                       double alpha) {
   const P g = d - clamp(d, b);
   return load - q * (stiffness * g + (alpha * magnitude(g)) * v);
@@ -37,14 +41,14 @@ inline P acceleration(const P& d, const P& v, const P& load, double stiffness, c
 
 // Load (Eq. 19) at the end of the step: exact in distribution on the grid; z is the step's normal.
 template <class P>
-inline P load_next(const P& load0, const P& drift, const P& sigma, const P& z, double h, double sqrt_h) {
+GD_KERNEL_INLINE P load_next(const P& load0, const P& drift, const P& sigma, const P& z, double h, double sqrt_h) {
   return load0 + drift * h + (sigma * sqrt_h) * z;
 }
 
 // One grid step of (d, v) by RK4 over the plan's segments (split at the stiffness switches), the
 // load a straight line from load0 to load1 within the step.
 template <class P>
-inline void rk4_step(const StepPlan& plan, double h, double b, double alpha, double q3, const P& mu,
+GD_KERNEL_INLINE void rk4_step(const StepPlan& plan, double h, double b, double alpha, double q3, const P& mu,
                      const P& load0, const P& load1, P& d, P& v) {
   for (int s = 0; s < plan.segments; ++s) {
     const StepSegment& seg = plan.segment[s];
