@@ -24,7 +24,7 @@ class Realization {
               std::uint64_t seed);
 
   // Advances by one grid step. Throws DivergenceError (lane 0) on a non-finite state.
-  inline void step();
+  GD_KERNEL_INLINE void step();
   // Back to t = 0 and the start of the random stream: the run repeats bit for bit.
   void reset();
 
@@ -69,7 +69,7 @@ class Realization {
 };
 
 // Inline: the live loop steps one realization at a time, and a call per step would show.
-inline void Realization::step() {
+GD_KERNEL_INLINE void Realization::step() {
   const auto index = static_cast<std::uint64_t>(n_) + 1;  // normal of this step
   if (index >= normals_first_ + kNormalChunk) refill_normals(normals_first_ + kNormalChunk);
   const StepPlan plan = mesh_.plan(n_);
