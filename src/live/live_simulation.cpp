@@ -149,7 +149,9 @@ void LiveSimulation::loop() {
   while (!stop_) {
     const auto start = std::chrono::steady_clock::now();
     const Next next = iterate();
-    if (!next.running || next.until) sink_.flush();  // about to wait
+    // About to wait, or this iteration alone took a while (a low publish rate without pacing): the
+    // sink's held messages go out now, not one publish period late.
+    if (!next.running || next.until || std::chrono::steady_clock::now() - start >= kMinWait) sink_.flush();
     std::unique_lock<std::mutex> lock(mutex_);
     if (next.running) {
       if (next.until) wake_.wait_until(lock, *next.until, [&] { return has_pending_ || stop_; });

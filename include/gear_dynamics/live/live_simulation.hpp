@@ -73,8 +73,8 @@ class LiveSink {
   virtual void idle(const LiveSample& /*last*/) {}
   // At t_end without loop: the last sample (already published), once per run.
   virtual void finished(const LiveSample& /*last*/) {}
-  // Before the loop waits (pacing, idle, a stop): a sink may hold what publish() handed it until
-  // then (the ROS adapter publishes a burst of states back to back: one wake-up of roscpp's
+  // Before the loop waits (pacing, idle, a stop), and after an iteration that took kMinWait or
+  // more: a sink may hold what publish() handed it until then (the ROS adapter publishes a burst of states back to back: one wake-up of roscpp's
   // writer thread per burst instead of per message). Also called by iterate()'s callers as they like.
   virtual void flush() {}
   // Whether publish() needs the center distance (it costs a window query).
