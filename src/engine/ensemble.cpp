@@ -1,5 +1,7 @@
 #include "gear_dynamics/engine/ensemble.hpp"
 
+#include "gear_dynamics/engine/rk4_kernel.hpp"
+
 #include <cmath>
 #include <sstream>
 
@@ -8,13 +10,6 @@ namespace gear_dynamics {
 namespace {
 
 using Packet = Eigen::Array<double, Ensemble::kPacket, 1>;
-
-// Eq. 15 with doc/model.md D1/D2: backlash in stiffness and damping, Hunt-Crossley |g|.
-inline Packet acceleration(const Packet& d, const Packet& v, const Packet& load, double stiffness,
-                           const Packet& q, double b, double alpha) {
-  const Packet g = d - d.max(-b).min(b);
-  return load - q * (stiffness * g + (alpha * g.abs()) * v);
-}
 
 int padded(std::size_t lanes) {
   return static_cast<int>((lanes + Ensemble::kPacket - 1) / Ensemble::kPacket) * Ensemble::kPacket;
@@ -104,30 +99,10 @@ void Ensemble::step() {
     const Packet load0 = load_.segment<kPacket>(p);
     const Packet mu = mu_.segment<kPacket>(p);
     const Packet z = Eigen::Map<const Packet>(z_col + p);
-    // Load (Eq. 19): exact in distribution on the grid, a straight line within the step.
-    const Packet load1 = load0 + drift_.segment<kPacket>(p) * h_ + (sigma_.segment<kPacket>(p) * sqrt_h) * z;
-
-    for (int s = 0; s < plan.segments; ++s) {
-      const StepSegment& seg = plan.segment[s];
-      const double H = (seg.end - seg.begin) * h_, half = 0.5 * H;
-      const Packet la = seg.begin == 0.0 ? load0 : Packet(load0 + seg.begin * (load1 - load0));
-      const Packet lb = seg.end == 1.0 ? load1 : Packet(load0 + seg.end * (load1 - load0));
-      const Packet lm = 0.5 * (la + lb);
-      const Packet qa = q3 + mu * seg.friction_start;
-      const Packet qm = q3 + mu * seg.friction_mid;
-      const Packet qb = q3 + mu * seg.friction_end;
-      const double K = seg.stiffness;
-
-      const Packet a1 = acceleration(d, v, la, K, qa, b, alpha);
-      const Packet v2 = v + half * a1;
-      const Packet a2 = acceleration(d + half * v, v2, lm, K, qm, b, alpha);
-      const Packet v3 = v + half * a2;
-      const Packet a3 = acceleration(d + half * v2, v3, lm, K, qm, b, alpha);
-      const Packet v4 = v + H * a3;
-      const Packet a4 = acceleration(d + H * v3, v4, lb, K, qb, b, alpha);
-      d += (H / 6.0) * (v + 2.0 * v2 + 2.0 * v3 + v4);
-      v += (H / 6.0) * (a1 + 2.0 * a2 + 2.0 * a3 + a4);
-    }
+    // The kernel shared with the one-lane path (Realization): the same operations per lane.
+    const Packet load1 = kernel::load_next<Packet>(load0, drift_.segment<kPacket>(p),
+                                                   sigma_.segment<kPacket>(p), z, h_, sqrt_h);
+    kernel::rk4_step<Packet>(plan, h_, b, alpha, q3, mu, load0, load1, d, v);
     delta_.segment<kPacket>(p) = d;
     velocity_.segment<kPacket>(p) = v;
     load_.segment<kPacket>(p) = load1;

@@ -1,6 +1,7 @@
 #include "gear_dynamics/engine/observers.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 
@@ -29,8 +30,7 @@ void WindowRange::reset() {
   prefix_.setConstant(-kInf);
 }
 
-void WindowRange::observe(std::int64_t n, const Eigen::Ref<const Eigen::ArrayXd>& delta,
-                          const Eigen::Ref<const Eigen::ArrayXd>& velocity) {
+Eigen::ArrayXXd::ColXpr WindowRange::block_of(std::int64_t n) {
   const std::int64_t block = n / block_;
   if (block != block_index_) {
     const std::int64_t segment = block / segment_;
@@ -49,13 +49,29 @@ void WindowRange::observe(std::int64_t n, const Eigen::Ref<const Eigen::ArrayXd>
     }
     block_index_ = block;
   }
-  auto current = blocks_.col(block - segment_index_ * segment_);
+  last_ = n;
+  return blocks_.col(block - segment_index_ * segment_);
+}
+
+void WindowRange::observe(std::int64_t n, const Eigen::Ref<const Eigen::ArrayXd>& delta,
+                          const Eigen::Ref<const Eigen::ArrayXd>& velocity) {
+  auto current = block_of(n);
   const auto l = static_cast<Eigen::Index>(lanes_);
   current.segment(0, l) = current.segment(0, l).max(delta);
   current.segment(l, l) = current.segment(l, l).max(-delta);
   current.segment(2 * l, l) = current.segment(2 * l, l).max(velocity);
   current.segment(3 * l, l) = current.segment(3 * l, l).max(-velocity);
-  last_ = n;
+}
+
+void WindowRange::observe_extrema(std::int64_t n, double max_delta, double max_minus_delta, double max_velocity,
+                                  double max_minus_velocity) {
+  if (lanes_ != 1) throw std::logic_error("WindowRange::observe_extrema: one lane only");
+  auto current = block_of(n);
+  // std::max(current, x): Eigen's max above, with the same operand order.
+  current[0] = std::max(current[0], max_delta);
+  current[1] = std::max(current[1], max_minus_delta);
+  current[2] = std::max(current[2], max_velocity);
+  current[3] = std::max(current[3], max_minus_velocity);
 }
 
 Eigen::ArrayXd WindowRange::reduce() const {
@@ -81,6 +97,22 @@ Eigen::ArrayXd WindowRange::velocity_range() const {
 
 Eigen::ArrayXd WindowRange::center_distance() const {
   return (delta_range() * velocity_range()).sqrt();
+}
+
+double WindowRange::center_distance(int lane) const {
+  if (last_ < 0) return std::sqrt(0.0 * 0.0);
+  // reduce() and the ranges for one lane: the same maxima, sums and product in the same order.
+  const Eigen::Index col = static_cast<Eigen::Index>(block_index_ - segment_index_ * segment_);
+  const std::int64_t first = block_index_ - (segment_ - 1);
+  const bool suffix = first < segment_index_ * segment_;
+  const Eigen::Index scol = suffix ? static_cast<Eigen::Index>(first - (segment_index_ - 1) * segment_) : 0;
+  double m[4];
+  for (int k = 0; k < 4; ++k) {
+    const Eigen::Index row = k * lanes_ + lane;
+    m[k] = std::max(prefix_[row], blocks_(row, col));
+    if (suffix) m[k] = std::max(m[k], suffix_(row, scol));
+  }
+  return std::sqrt((m[0] + m[1]) * (m[2] + m[3]));
 }
 
 SteadyStateTime::SteadyStateTime(int lanes, double backlash, double tolerance)

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
+#include <limits>
 #include <numeric>
 #include <utility>
 
@@ -69,8 +70,8 @@ LiveSimulation::LiveSimulation(const ModelConfig& config, const SimulatorSetting
       clock_(clock),
       load_input_(load_input_from_string(settings.load_input)),
       end_step_(config.run.steps_for(settings.t_end)),
-      ensemble_(derive(config.gear), config.run.time_step, config.initial, {lane_of(config, settings, load_input_)},
-                config.seed),
+      realization_(derive(config.gear), config.run.time_step, config.initial, lane_of(config, settings, load_input_),
+                   config.seed),
       real_time_factor_(settings.real_time_factor),
       publish_rate_(settings.publish_rate),
       period_(publish_period_steps(publish_rate_, config.run.time_step)),
@@ -148,6 +149,9 @@ void LiveSimulation::loop() {
   while (!stop_) {
     const auto start = std::chrono::steady_clock::now();
     const Next next = iterate();
+    // About to wait, or this iteration alone took a while (a low publish rate without pacing): the
+    // sink's held messages go out now, not one publish period late.
+    if (!next.running || next.until || std::chrono::steady_clock::now() - start >= kMinWait) sink_.flush();
     std::unique_lock<std::mutex> lock(mutex_);
     if (next.running) {
       if (next.until) wake_.wait_until(lock, *next.until, [&] { return has_pending_ || stop_; });
@@ -160,6 +164,7 @@ void LiveSimulation::loop() {
       wake_.wait_for(lock, kIdlePeriod, [&] { return has_pending_ || stop_; });
     }
   }
+  sink_.flush();
 }
 
 LiveSimulation::Next LiveSimulation::iterate() {
@@ -175,9 +180,9 @@ LiveSimulation::Next LiveSimulation::iterate() {
   const bool stepping = r.step && outcome.ok;
   if (running() || stepping) advance();
   if (stepping)
-    outcome = diverged_ ? Outcome{false, divergence_} : Outcome{true, "t = " + seconds(ensemble_.time())};
-  const LaneSpec& lane = ensemble_.lane(0);
-  local_.time = ensemble_.time();
+    outcome = diverged_ ? Outcome{false, divergence_} : Outcome{true, "t = " + seconds(realization_.time())};
+  const LaneSpec& lane = realization_.lane();
+  local_.time = realization_.time();
   local_.state = state_name();
   local_.divergence = divergence_;
   local_.mu = lane.mu;
@@ -201,12 +206,14 @@ LiveSimulation::Next LiveSimulation::iterate() {
 }
 
 LiveSimulation::Outcome LiveSimulation::apply(const Request& r) {
-  const double t = ensemble_.time();
-  const auto n = static_cast<long long>(ensemble_.step_index());
+  if (!r.mu && !r.sigma && !r.drift && !r.real_time_factor && !r.publish_rate && !r.paused && !r.reset && !r.step)
+    return Outcome{};  // the usual case: nothing asked
+  const double t = realization_.time();
+  const auto n = static_cast<long long>(realization_.step_index());
   const auto changed = [&](const char* name, double from, double to, const char* unit) {
     log(LiveLogLevel::Info, format("%s: %g -> %g%s from t = %.9g s (step %lld)", name, from, to, unit, t, n));
   };
-  const LaneSpec& lane = ensemble_.lane(0);
+  const LaneSpec& lane = realization_.lane();
   Request q = r;
   if (load_input_ == LoadInput::External && ((q.sigma && *q.sigma != 0.0) || (q.drift && *q.drift != 0.0))) {
     log(LiveLogLevel::Warn, "sigma and lambda stay 0 with the external load (simulator.load_input: external)");
@@ -215,15 +222,15 @@ LiveSimulation::Outcome LiveSimulation::apply(const Request& r) {
   }
   if (q.mu) {
     changed("mu", lane.mu, *q.mu, "");
-    ensemble_.set_mu(0, *q.mu);
+    realization_.set_mu(*q.mu);
   }
   if (q.sigma) {
     changed("sigma", lane.sigma, *q.sigma, " m/s^2/sqrt(s)");
-    ensemble_.set_sigma(0, *q.sigma);
+    realization_.set_sigma(*q.sigma);
   }
   if (q.drift) {
     changed("lambda", lane.drift, *q.drift, " m/s^3");
-    ensemble_.set_drift(0, *q.drift);
+    realization_.set_drift(*q.drift);
   }
   if (q.real_time_factor) {
     changed("real_time_factor", real_time_factor_, *q.real_time_factor, " (0 = as fast as possible)");
@@ -254,24 +261,25 @@ LiveSimulation::Outcome LiveSimulation::apply(const Request& r) {
     log(LiveLogLevel::Warn, why);
     out = Outcome{false, why};
   };
-  const std::string at_end = "the run is at t_end = " + seconds(settings_.t_end) + "; call ~reset to run again";
-  const std::string blew_up = "the run diverged (" + divergence_ + "); call ~reset to start over";
+  // Built only when refused: apply() runs at every publish instant, mostly with nothing to apply.
+  const auto at_end = [&] { return "the run is at t_end = " + seconds(settings_.t_end) + "; call ~reset to run again"; };
+  const auto blew_up = [&] { return "the run diverged (" + divergence_ + "); call ~reset to start over"; };
   if (q.paused) {
     if (*q.paused) {
-      if (!paused_) log(LiveLogLevel::Info, format("paused at t = %.9g s", ensemble_.time()));
+      if (!paused_) log(LiveLogLevel::Info, format("paused at t = %.9g s", realization_.time()));
       paused_ = true;
     } else if (diverged_) {
-      refuse(blew_up);
+      refuse(blew_up());
     } else if (finished_) {
-      refuse(at_end);
+      refuse(at_end());
     } else {
-      if (paused_) log(LiveLogLevel::Info, format("running from t = %.9g s", ensemble_.time()));
+      if (paused_) log(LiveLogLevel::Info, format("running from t = %.9g s", realization_.time()));
       paused_ = false;
     }
   }
   if (q.step) {
-    if (diverged_) refuse(blew_up);
-    else if (finished_) refuse(at_end);
+    if (diverged_) refuse(blew_up());
+    else if (finished_) refuse(at_end());
     else if (!paused_) refuse("~step works while paused; call ~pause first");
   }
   return out;
@@ -290,33 +298,59 @@ void LiveSimulation::take_load_command() {
     log(LiveLogLevel::Warn, format("load command %g is not finite: ignored (stamp %.9f s)", value, stamp));
     return;
   }
-  const double phi = ensemble_.load()[0];
+  const double phi = realization_.load();
   const double next = load_input_ == LoadInput::External || !load_applied_ ? value : phi + (value - *load_applied_);
   const bool first = !load_applied_;
   load_applied_ = value;
-  ensemble_.set_load(0, next);
+  realization_.set_load(next);
   ++local_.load_commands;
   log(first ? LiveLogLevel::Info : LiveLogLevel::Debug,
       format("load command %g m/s^2 (stamp %.9f s) in effect from step %lld (t = %.9g s): Phi = %.17g m/s^2",
-             value, stamp, static_cast<long long>(ensemble_.step_index()), ensemble_.time(), next));
+             value, stamp, static_cast<long long>(realization_.step_index()), realization_.time(), next));
 }
 
 void LiveSimulation::advance() {
-  const std::int64_t from = ensemble_.step_index();
+  const std::int64_t from = realization_.step_index();
   std::int64_t to = (from / period_ + 1) * period_;
   if (end_step_ > 0) to = std::min(to, end_step_);
+  // The trailing-window observer fused into the loop: each step's extrema fold into four scalars,
+  // merged into window_ at the end of every block of the observer and at the end (the same
+  // maxima as observing step by step, WindowRange::observe_extrema).
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  const std::int64_t block = window_.block_steps();
+  double hi_d = -kInf, lo_d = -kInf, hi_v = -kInf, lo_v = -kInf;  // lo: max of the negated values
+  std::int64_t n = from;
+  std::int64_t block_end = ((from + 1) / block + 1) * block;  // the block after that of step from + 1
+  bool folded = false;  // steps folded in since the last merge
+  const auto flush = [&] {
+    window_.observe_extrema(n, hi_d, lo_d, hi_v, lo_v);
+    hi_d = lo_d = hi_v = lo_v = -kInf;
+    folded = false;
+  };
   try {
-    while (ensemble_.step_index() < to) {
-      if (stop_.load(std::memory_order_relaxed)) return;
+    while (n < to) {
+      if (stop_.load(std::memory_order_relaxed)) break;
       if (load_pending_.load(std::memory_order_acquire)) take_load_command();
-      ensemble_.step();
-      window_.observe(ensemble_.step_index(), ensemble_.delta(), ensemble_.velocity());
+      realization_.step();
+      n = realization_.step_index();
+      const double d = realization_.delta(), v = realization_.velocity();
+      hi_d = std::max(hi_d, d);
+      lo_d = std::max(lo_d, -d);
+      hi_v = std::max(hi_v, v);
+      lo_v = std::max(lo_v, -v);
+      folded = true;
+      if (n + 1 == block_end) {
+        flush();
+        block_end += block;
+      }
     }
   } catch (const DivergenceError& e) {
-    local_.steps += ensemble_.step_index() - from;
+    local_.steps += realization_.step_index() - from;
     diverge(e.what());
     return;
   }
+  if (folded) flush();  // the steps of a block not finished yet
+  if (n < to) return;  // stopped
   local_.steps += to - from;
   publish();
   if (to == end_step_ && !diverged_) {
@@ -332,26 +366,26 @@ void LiveSimulation::advance() {
 }
 
 LiveSample LiveSimulation::sample() const {
-  const Ensemble& e = ensemble_;
+  const Realization& e = realization_;
   LiveSample s;
   s.step = e.step_index();
   s.t = grid_time(s.step, e.time_step());
-  s.delta = e.delta()[0];
-  s.delta_dot = e.velocity()[0];
-  s.phi = e.load()[0];
+  s.delta = e.delta();
+  s.delta_dot = e.velocity();
+  s.phi = e.load();
   s.mesh_stiffness = e.mesh().stiffness(e.time());
   s.mesh_phase = e.mesh().phase(e.time());
-  s.mu = e.lane(0).mu;
-  s.sigma = e.lane(0).sigma;
-  s.drift = e.lane(0).drift;
-  s.realization = e.lane(0).realization;
+  s.mu = e.lane().mu;
+  s.sigma = e.lane().sigma;
+  s.drift = e.lane().drift;
+  s.realization = e.lane().realization;
   s.seed = e.seed();
   return s;
 }
 
 void LiveSimulation::publish() {
   LiveSample s = sample();
-  if (sink_.wants_center_distance()) s.center_distance = window_.center_distance()[0];
+  if (sink_.wants_center_distance()) s.center_distance = window_.center_distance(0);
   if (!std::isfinite(s.delta) || !std::isfinite(s.delta_dot) || !std::isfinite(s.phi) ||
       !std::isfinite(s.center_distance)) {
     diverge("non-finite state at t = " + seconds(s.t) + ": delta = " + std::to_string(s.delta) +
@@ -363,10 +397,10 @@ void LiveSimulation::publish() {
 }
 
 void LiveSimulation::publish_run_info() {
-  const LaneSpec& lane = ensemble_.lane(0);
+  const LaneSpec& lane = realization_.lane();
   LiveRunInfo info;
-  info.step = ensemble_.step_index();
-  info.t = ensemble_.time();
+  info.step = realization_.step_index();
+  info.t = realization_.time();
   info.config = config_;
   info.config.friction_coefficient = lane.mu;
   if (!settings_.deterministic && load_input_ != LoadInput::External) {  // S1 ignores the load noise settings
@@ -382,9 +416,10 @@ void LiveSimulation::publish_run_info() {
 }
 
 void LiveSimulation::restart() {
-  ensemble_.reset();
+  realization_.reset();
   window_ = make_window();
-  window_.observe(0, ensemble_.delta(), ensemble_.velocity());
+  window_.observe_extrema(0, realization_.delta(), -realization_.delta(), realization_.velocity(),
+                          -realization_.velocity());
   finished_ = diverged_ = false;
   divergence_.clear();
   anchored_ = false;
@@ -407,11 +442,11 @@ std::optional<LiveClock::time_point> LiveSimulation::pace() {
   // whichever way the double product rounds.
   const auto target = anchor_wall_ + std::chrono::round<LiveClock::time_point::duration>(
                                          std::chrono::duration<double>(
-                                             static_cast<double>(ensemble_.step_index() - anchor_step_) *
+                                             static_cast<double>(realization_.step_index() - anchor_step_) *
                                              config_.run.time_step / real_time_factor_));
   if (!anchored_ || now > target + kMaxLag) {
     anchor_wall_ = now;
-    anchor_step_ = ensemble_.step_index();
+    anchor_step_ = realization_.step_index();
     anchored_ = true;
     return std::nullopt;
   }

@@ -24,6 +24,12 @@ constexpr uint32_t kQueue = 1000;
 // Gazebo throttles its clock): every sim-time node, this one included, wakes up for each /clock
 // message, and nothing needs it finer than the state stamps, which carry the exact time.
 constexpr auto kClockInterval = std::chrono::milliseconds(5);
+// Messages of one burst go out together (GearSimulator::flush): roscpp wakes its writer thread for
+// the first and queues the rest while it sends, instead of a wake-up (pipe write, epoll, futex) per
+// message. The loop flushes before every wait; without waits (real_time_factor 0, or a slow
+// machine) a burst ends after this many publish instants or this much wall time.
+constexpr std::size_t kBurst = 64;
+constexpr auto kBurstWall = std::chrono::milliseconds(1);
 
 SimulatorSettings load_settings(const ros::NodeHandle& nh, double time_step) {
   return parse_simulator_settings(yaml_from_parameters(nh, {"simulator"}), time_step);
@@ -82,6 +88,7 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
   private_nh_.param<std::string>("record_prefix", record_prefix_, "");
   record_open();  // throws ConfigError when the bag cannot be opened
 
+  held_.reserve(5 * kBurst + 5);
   // Publishes t = 0 and the run info at once.
   sim_.emplace(config_, settings_, static_cast<LiveSink&>(*this));
 
@@ -91,7 +98,7 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
   step_srv_ = private_nh_.advertiseService("step", &GearSimulator::step, this);
 
   // The first callback gets the values loaded from YAML, not the .cfg defaults.
-  const LaneSpec& lane = sim_->ensemble().lane(0);
+  const LaneSpec& lane = sim_->realization().lane();
   dynamic_.mu = lane.mu;
   dynamic_.sigma = lane.sigma;
   dynamic_.lambda = lane.drift;
@@ -290,28 +297,40 @@ bool GearSimulator::wants_center_distance() const {
 void GearSimulator::publish(const LiveSample& s) {
   publish_clock(s.step, s.t, false);
   const bool recording = !record_prefix_.empty();
+  if (held_.empty()) held_since_ = std::chrono::steady_clock::now();
   if (recording || state_.wanted()) {
-    const GearState m = make_state(s);
-    state_.pub.publish(m);
+    held_.push_back(Held{&state_, make_state(s), {}});
+    const GearState& m = held_.back().state;
     record(state_.topic, m.header.stamp, m);
   }
   if (settings_.publish_scalars) {
     const ros::Time stamp = sim_stamp(s.t);
     const auto scalar = [&](const CountedPublisher& p, double value) {
       if (!recording && !p.wanted()) return;
-      std_msgs::Float64 m;
-      m.data = value;
-      p.pub.publish(m);
-      record(p.topic, stamp, m);
+      held_.push_back(Held{&p, {}, {}});
+      held_.back().scalar.data = value;
+      record(p.topic, stamp, held_.back().scalar);
     };
     scalar(delta_, s.delta);
     scalar(delta_dot_, s.delta_dot);
     scalar(phi_, s.phi);
     scalar(center_distance_, s.center_distance);
   }
+  if (held_.size() >= kBurst || std::chrono::steady_clock::now() - held_since_ >= kBurstWall) flush();
+}
+
+void GearSimulator::flush() {
+  for (const Held& h : held_) {
+    if (h.pub == &state_)
+      h.pub->pub.publish(h.state);
+    else
+      h.pub->pub.publish(h.scalar);
+  }
+  held_.clear();  // keeps the capacity
 }
 
 void GearSimulator::finished(const LiveSample& last) {
+  flush();  // the run's states before its final state
   const GearState m = make_state(last);
   final_state_pub_.publish(m);
   record(final_state_pub_.getTopic(), m.header.stamp, m);
@@ -319,6 +338,7 @@ void GearSimulator::finished(const LiveSample& last) {
 }
 
 void GearSimulator::idle(const LiveSample& last) {
+  flush();
   publish_clock(last.step, last.t, true);  // where time stands, every idle period
 }
 
@@ -332,6 +352,7 @@ void GearSimulator::publish_clock(std::int64_t /*step*/, double t, bool always) 
 }
 
 void GearSimulator::run_info(const LiveRunInfo& i) {
+  flush();  // the states before the change
   const bool deterministic = i.settings.deterministic;
   RunInfo info = make_run_info(i.config, deterministic ? RunKind::S1 : RunKind::Stochastic,
                                static_cast<std::uint32_t>(i.lane.realization), i.lane.mu, i.lane.sigma,

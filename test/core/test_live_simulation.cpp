@@ -81,7 +81,7 @@ TEST(LiveSimulation, StartPublishesTheInitialStateAndRunInfo) {
   // Paused: an iteration neither steps nor publishes.
   EXPECT_FALSE(sim.iterate().running);
   EXPECT_EQ(sink.samples.size(), 1u);
-  EXPECT_EQ(sim.ensemble().step_index(), 0);
+  EXPECT_EQ(sim.realization().step_index(), 0);
 }
 
 TEST(LiveSimulation, RequestsApplyAtTheNextPublishInstant) {
@@ -97,7 +97,7 @@ TEST(LiveSimulation, RequestsApplyAtTheNextPublishInstant) {
   r = Request{};
   r.sigma = 7.0;
   sim.post(r);  // merged with the first
-  EXPECT_EQ(sim.ensemble().lane(0).mu, l.model.friction_coefficient);  // not before the loop takes it
+  EXPECT_EQ(sim.realization().lane().mu, l.model.friction_coefficient);  // not before the loop takes it
   sim.iterate();
   EXPECT_TRUE(sim.last_outcome().ok);
   // Both apply from step 2000 on: run_info says so, and the next sample carries them.
@@ -156,14 +156,14 @@ TEST(LiveSimulation, PauseStepReset) {
   EXPECT_FALSE(sim.iterate().running);
   EXPECT_EQ(sink.samples.size(), before);
   EXPECT_EQ(sim.status().state, "paused");
-  const std::int64_t at = sim.ensemble().step_index();
+  const std::int64_t at = sim.realization().step_index();
 
   r = Request{};
   r.step = true;
   sim.post(r);
   EXPECT_FALSE(sim.iterate().running);  // one publish period, then paused again
   EXPECT_TRUE(sim.last_outcome().ok);
-  EXPECT_EQ(sim.ensemble().step_index(), at + 1000);
+  EXPECT_EQ(sim.realization().step_index(), at + 1000);
   EXPECT_EQ(sink.samples.size(), before + 1);
   EXPECT_EQ(at, 3000);  // the refused ~step's iteration still ran one period
   EXPECT_EQ(sim.last_outcome().message, "t = 0.004 s");
@@ -253,7 +253,7 @@ TEST(LiveSimulation, DivergenceStopsWithAMessage) {
   r.reset = true;
   sim.post(r);
   sim.iterate();
-  EXPECT_FALSE(sim.diverged() && sim.ensemble().step_index() == 0);
+  EXPECT_FALSE(sim.diverged() && sim.realization().step_index() == 0);
   EXPECT_EQ(sink.samples.size(), 2u);  // t = 0 again
 }
 
@@ -313,14 +313,14 @@ TEST(LiveSimulation, PacesByTheInjectedClock) {
   sim.post(r);
   sim.iterate();
   const auto start = clock.t;
-  const std::int64_t from = sim.ensemble().step_index();
+  const std::int64_t from = sim.realization().step_index();
   for (int i = 0; i < 1000; ++i) {
     n = sim.iterate();
     ASSERT_TRUE(n.until) << i;
     clock.t = *n.until;
   }
   EXPECT_EQ(clock.t - start, std::chrono::seconds(1));
-  EXPECT_EQ(sim.ensemble().step_index() - from, 1000 * 1000);
+  EXPECT_EQ(sim.realization().step_index() - from, 1000 * 1000);
 
   // 10 kHz at factor 1: one sleep per 10 publish periods (1 ms), 1000 per wall second, not 10000.
   r = Request{};
@@ -328,7 +328,7 @@ TEST(LiveSimulation, PacesByTheInjectedClock) {
   sim.post(r);
   int waits = 0;
   const auto start10 = clock.t;
-  const std::int64_t from10 = sim.ensemble().step_index();
+  const std::int64_t from10 = sim.realization().step_index();
   while (clock.t - start10 < std::chrono::seconds(1)) {
     n = sim.iterate();
     if (n.until) {
@@ -337,7 +337,7 @@ TEST(LiveSimulation, PacesByTheInjectedClock) {
     }
   }
   EXPECT_NEAR(waits, 1000, 10);
-  EXPECT_NEAR(static_cast<double>(sim.ensemble().step_index() - from10), 1e6, 2000.0);
+  EXPECT_NEAR(static_cast<double>(sim.realization().step_index() - from10), 1e6, 2000.0);
 }
 
 namespace {
@@ -420,7 +420,7 @@ TEST(LiveSimulation, ExternalLoadHoldsTheCommandFromTheNextStep) {
   RecordingSink sink;
   gd::LiveSimulation sim(l.model, l.sim, sink);
   EXPECT_EQ(sim.load_input(), gd::LoadInput::External);
-  EXPECT_EQ(sim.ensemble().lane(0).sigma, 0.0);
+  EXPECT_EQ(sim.realization().lane().sigma, 0.0);
   EXPECT_EQ(sink.samples[0].phi, l.model.load.initial_mean);  // before any command: Phi(0), held
   sim.iterate();
   EXPECT_EQ(sink.samples.back().phi, l.model.load.initial_mean);
@@ -442,7 +442,7 @@ TEST(LiveSimulation, ExternalLoadHoldsTheCommandFromTheNextStep) {
   r.sigma = 3.0;
   sim.post(r);
   sim.iterate();
-  EXPECT_EQ(sim.ensemble().lane(0).sigma, 0.0);
+  EXPECT_EQ(sim.realization().lane().sigma, 0.0);
   EXPECT_TRUE(sink.logged(gd::LiveLogLevel::Warn, "sigma and lambda stay 0 with the external load"));
 }
 

@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <utility>
 
 #include "gear_dynamics/engine/ensemble.hpp"
@@ -172,5 +174,27 @@ TEST(Simulate, ObserversAgreeWithTheFullPath) {
     ASSERT_EQ(results[i].snapshots.size(), 3u);
     for (int k = 0; k < 3; ++k) EXPECT_EQ(results[i].snapshots[k].delta, snap[k][i]);
     EXPECT_DOUBLE_EQ(results[i].snapshots[1].time, 0.017);
+  }
+}
+
+TEST(WindowRange, FoldedExtremaAndOneLaneQueryMatchStepByStep) {
+  // The live node's path: extrema folded per block (observe_extrema), merged at block ends and at
+  // arbitrary stops (publish instants that do not divide the block), and center_distance(lane):
+  // bit for bit what observing every step and center_distance()[0] give.
+  const std::int64_t window = 120, block = 40;
+  gd::WindowRange stepwise(1, window, block), folded(1, window, block);
+  const double inf = std::numeric_limits<double>::infinity();
+  double hd = -inf, ld = -inf, hv = -inf, lv = -inf;
+  for (std::int64_t n = 0; n <= 1000; ++n) {
+    const double d = sig_d(n, 0), v = sig_v(n, 0);
+    stepwise.observe(n, Eigen::ArrayXd::Constant(1, d), Eigen::ArrayXd::Constant(1, v));
+    hd = std::max(hd, d), ld = std::max(ld, -d), hv = std::max(hv, v), lv = std::max(lv, -v);
+    if ((n + 1) % block == 0 || n % 17 == 0) {
+      folded.observe_extrema(n, hd, ld, hv, lv);
+      hd = ld = hv = lv = -inf;
+      const double a = stepwise.center_distance()[0], b = folded.center_distance(0);
+      ASSERT_EQ(std::memcmp(&a, &b, sizeof a), 0) << "n " << n;
+      ASSERT_EQ(folded.center_distance()[0], b);
+    }
   }
 }

@@ -1,8 +1,9 @@
 // The gear SDE (doc/model.md §2) for a block of realizations stepped together: structure of arrays,
 // one SIMD lane per realization, RK4 with the stiffness switches split out (doc/model.md §5).
-// A single realization is a block of one lane, so the live node, the CLI and the Monte Carlo batch
-// all run this code. Every lane's arithmetic is independent of the other lanes (the build uses
-// -ffp-contract=off), so a realization's numbers do not depend on the block it runs in.
+// The CLI and the Monte Carlo batch run this class; the live node steps its one realization with
+// Realization (engine/realization.hpp), the same kernel (engine/rk4_kernel.hpp) on one lane. Every
+// lane's arithmetic is independent of the other lanes (the build uses -ffp-contract=off), so a
+// realization's numbers do not depend on the block it runs in, nor on the lane width.
 #pragma once
 
 #include <Eigen/Core>

@@ -23,11 +23,17 @@ class WindowRange {
   // Sample of grid step n; steps must arrive in order, one after the other.
   void observe(std::int64_t n, const Eigen::Ref<const Eigen::ArrayXd>& delta,
                const Eigen::Ref<const Eigen::ArrayXd>& velocity);
+  // One lane (lanes == 1): the extrema of grid steps that all lie in the block of step n, the last
+  // of them n; the same as observing each of those steps in order (a max keeps the first of equal
+  // values either way). The live node folds each step into four scalars and merges them here.
+  void observe_extrema(std::int64_t n, double max_delta, double max_minus_delta, double max_velocity,
+                       double max_minus_velocity);
   void reset();
 
   Eigen::ArrayXd delta_range() const;
   Eigen::ArrayXd velocity_range() const;
   Eigen::ArrayXd center_distance() const;  // [m s^-1/2] in SI
+  double center_distance(int lane) const;  // the same for one lane, without allocating
 
   std::int64_t block_steps() const { return block_; }
   int capacity_blocks() const { return static_cast<int>(segment_); }
@@ -35,6 +41,8 @@ class WindowRange {
  private:
   // Maxima of (delta, -delta, delta_dot, -delta_dot) stacked: one max covers all four extrema.
   Eigen::ArrayXd reduce() const;
+  // Moves to step n's block (n in order) and returns its column.
+  Eigen::ArrayXXd::ColXpr block_of(std::int64_t n);
   int lanes_;
   std::int64_t window_, block_, segment_;  // segment_ = blocks per segment = window/block + 1
   std::int64_t last_ = -1, block_index_ = -1, segment_index_ = -1;

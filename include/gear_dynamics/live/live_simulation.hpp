@@ -22,6 +22,7 @@
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/config/simulator_settings.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
+#include "gear_dynamics/engine/realization.hpp"
 #include "gear_dynamics/engine/observers.hpp"
 
 namespace gear_dynamics {
@@ -72,6 +73,10 @@ class LiveSink {
   virtual void idle(const LiveSample& /*last*/) {}
   // At t_end without loop: the last sample (already published), once per run.
   virtual void finished(const LiveSample& /*last*/) {}
+  // Before the loop waits (pacing, idle, a stop), and after an iteration that took kMinWait or
+  // more: a sink may hold what publish() handed it until then (the ROS adapter publishes a burst of states back to back: one wake-up of roscpp's
+  // writer thread per burst instead of per message). Also called by iterate()'s callers as they like.
+  virtual void flush() {}
   // Whether publish() needs the center distance (it costs a window query).
   virtual bool wants_center_distance() const { return true; }
 };
@@ -163,7 +168,8 @@ class LiveSimulation {
   Outcome last_outcome() const;
 
   // ---- the stepping loop's own view (read it from the stepping thread or between iterate()) ----
-  const Ensemble& ensemble() const { return ensemble_; }
+  // The one realization, stepped by the one-lane path (bit for bit its path in a batch block).
+  const Realization& realization() const { return realization_; }
   std::int64_t period_steps() const { return period_; }
   std::int64_t end_step() const { return end_step_; }
   bool paused() const { return paused_; }
@@ -200,7 +206,7 @@ class LiveSimulation {
   const std::int64_t end_step_;  // 0 = run on forever
 
   // Owned by the stepping loop.
-  Ensemble ensemble_;
+  Realization realization_;
   double real_time_factor_, publish_rate_;
   std::int64_t period_;  // grid steps per publish period
   WindowRange window_;   // trailing-window ranges for the center distance d(t)

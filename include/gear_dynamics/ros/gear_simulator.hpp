@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "gear_dynamics/GearState.h"
 #include "gear_dynamics/SimulatorConfig.h"
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/config/simulator_settings.hpp"
@@ -79,6 +80,7 @@ class GearSimulator : private LiveSink {
   void idle(const LiveSample& last) override;
   void finished(const LiveSample& last) override;
   bool wants_center_distance() const override;
+  void flush() override;  // publishes the held burst (stepping thread)
   void publish_clock(std::int64_t step, double t, bool always);  // else throttled to kClockInterval
 
   // The bag of record:=true (~record_prefix not empty): opened at the start and after a reset that
@@ -106,6 +108,16 @@ class GearSimulator : private LiveSink {
 
   // Stepping thread only.
   std::chrono::steady_clock::time_point last_clock_;
+  // The burst of messages publish() built and flush() publishes, in order, back to back (at most
+  // kBurst or kBurstWall old: at real_time_factor 0 the loop never waits). Reused: no allocation
+  // per message once warm.
+  struct Held {
+    const CountedPublisher* pub;
+    GearState state;  // pub == &state_
+    std_msgs::Float64 scalar;
+  };
+  std::vector<Held> held_;
+  std::chrono::steady_clock::time_point held_since_;
 
   // The recording (stepping thread; diagnostics read it).
   std::mutex record_mutex_;

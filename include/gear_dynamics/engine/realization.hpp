@@ -1,0 +1,90 @@
+// One realization of the gear SDE stepped with one lane's arithmetic (scalar doubles): the live
+// node's one-lane path. It runs the kernel Ensemble runs (engine/rk4_kernel.hpp, the same operations
+// in the same order), the same mesh plan and the same random stream NormalStream(seed, realization),
+// so its path is bit for bit the path of the same LaneSpec in any Ensemble block, at any lane
+// position (test_core: Realization.*). An Ensemble of one lane would pay for a full SIMD packet.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+
+#include "gear_dynamics/engine/ensemble.hpp"
+#include "gear_dynamics/engine/normal_stream.hpp"
+#include "gear_dynamics/engine/rk4_kernel.hpp"
+#include "gear_dynamics/model/gear_pair.hpp"
+#include "gear_dynamics/model/mesh_schedule.hpp"
+
+namespace gear_dynamics {
+
+class Realization {
+ public:
+  static constexpr int kNormalChunk = Ensemble::kNormalChunk;  // normals drawn per refill
+
+  Realization(const GearPair& gear, double time_step, const InitialState& initial, const LaneSpec& lane,
+              std::uint64_t seed);
+
+  // Advances by one grid step. Throws DivergenceError (lane 0) on a non-finite state.
+  GD_KERNEL_INLINE void step();
+  // Back to t = 0 and the start of the random stream: the run repeats bit for bit.
+  void reset();
+
+  std::int64_t step_index() const { return n_; }
+  double time() const { return static_cast<double>(n_) * h_; }
+  double time_step() const { return h_; }
+  std::uint64_t seed() const { return seed_; }
+  const GearPair& gear() const { return gear_; }
+  const MeshSchedule& mesh() const { return mesh_; }
+  const LaneSpec& lane() const { return spec_; }
+
+  double delta() const { return delta_; }
+  double velocity() const { return velocity_; }
+  double load() const { return load_; }
+
+  // Run-time changes, as Ensemble's; they take effect at the next step.
+  void set_mu(double mu) { spec_.mu = mu; }
+  void set_sigma(double sigma);
+  void set_drift(double drift) { spec_.drift = drift; }
+  void set_load(double load) { load_ = load; }
+  void set_state(double delta, double velocity) {
+    delta_ = delta;
+    velocity_ = velocity;
+  }
+
+ private:
+  void refill_normals(std::uint64_t first_index);
+  [[noreturn]] void report_divergence() const;
+
+  GearPair gear_;
+  MeshSchedule mesh_;
+  double h_, sqrt_h_;
+  InitialState initial_;
+  LaneSpec spec_;
+  NormalStream stream_;
+  std::uint64_t seed_;
+  std::int64_t n_ = 0;
+  double delta_ = 0.0, velocity_ = 0.0, load_ = 0.0;
+  // normals_[j] is normal normals_first_ + j of the stream (zeros without a stream).
+  double normals_[kNormalChunk] = {};
+  std::uint64_t normals_first_ = 0;
+};
+
+// Inline: the live loop steps one realization at a time, and a call per step would show.
+GD_KERNEL_INLINE void Realization::step() {
+  const auto index = static_cast<std::uint64_t>(n_) + 1;  // normal of this step
+  if (index >= normals_first_ + kNormalChunk) refill_normals(normals_first_ + kNormalChunk);
+  const StepPlan plan = mesh_.plan(n_);
+  const double z = normals_[index - normals_first_];
+  const double load0 = load_;
+  const double load1 = kernel::load_next<double>(load0, spec_.drift, spec_.sigma, z, h_, sqrt_h_);
+  double d = delta_, v = velocity_;
+  kernel::rk4_step<double>(plan, h_, gear_.in.backlash, gear_.damping_coefficient, gear_.q3, spec_.mu, load0,
+                           load1, d, v);
+  delta_ = d;
+  velocity_ = v;
+  load_ = load1;
+  ++n_;
+  // Ensemble's test: the sum first (one test per step), the states only when it is not finite.
+  if (!std::isfinite(d + v) && !(std::isfinite(d) && std::isfinite(v))) report_divergence();
+}
+
+}  // namespace gear_dynamics

@@ -1,0 +1,44 @@
+#include "gear_dynamics/engine/realization.hpp"
+
+#include <sstream>
+#include <stdexcept>
+
+namespace gear_dynamics {
+
+Realization::Realization(const GearPair& gear, double time_step, const InitialState& initial,
+                         const LaneSpec& lane, std::uint64_t seed)
+    : gear_(gear), mesh_(gear, time_step), h_(time_step), sqrt_h_(std::sqrt(time_step)), initial_(initial),
+      spec_(lane), stream_(seed, lane.realization), seed_(seed) {
+  if (!spec_.stochastic && (spec_.sigma != 0.0 || spec_.load_sd != 0.0))
+    throw std::invalid_argument("Realization: a lane without a random stream needs sigma = 0 and load_sd = 0");
+  reset();
+}
+
+void Realization::reset() {
+  n_ = 0;
+  refill_normals(0);
+  delta_ = initial_.deflection;
+  velocity_ = initial_.velocity;
+  // Normal 0 of the stream gives Phi(0); normal n + 1 drives step n (as Ensemble::reset).
+  load_ = spec_.load_mean + spec_.load_sd * normals_[0];
+}
+
+void Realization::set_sigma(double sigma) {
+  if (!spec_.stochastic && sigma != 0.0)
+    throw std::invalid_argument("Realization: a lane without a random stream cannot take sigma != 0");
+  spec_.sigma = sigma;
+}
+
+void Realization::refill_normals(std::uint64_t first_index) {
+  normals_first_ = first_index;
+  if (spec_.stochastic) stream_.fill(first_index, normals_, kNormalChunk);  // else they stay zero
+}
+
+void Realization::report_divergence() const {
+  std::ostringstream msg;
+  msg << "gear model diverged: realization " << spec_.realization << " (lane 0, mu " << spec_.mu
+      << ") has delta = " << delta_ << " m, delta_dot = " << velocity_ << " m/s at t = " << time() << " s";
+  throw DivergenceError(msg.str(), 0, spec_.realization, time());
+}
+
+}  // namespace gear_dynamics
