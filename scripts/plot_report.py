@@ -263,11 +263,13 @@ def spectrum_figure(folder, out):
     fig, axes = plt.subplots(nrow, ncol, figsize=(4.5 * ncol, 3.2 * nrow), sharex=True, sharey=True, squeeze=False)
     for ax, (label, g) in zip(axes.flat, groups.items()):
         fm = float(info[label]["mesh_frequency[Hz]"])
-        g = [r for r in g if 0 < float(r["f[Hz]"]) <= 36 * fm]  # past the contact frequencies at 1000 rpm
+        g = [r for r in g if 0 < float(r["f[Hz]"]) <= 15 * fm]  # the harmonics; the CSV goes to Nyquist
         f = col(g, "f[Hz]")
-        ax.fill_between(f, col(g, "run_low[mm^2/Hz]"), col(g, "run_high[mm^2/Hz]"), color="0.85", lw=0, label="runs' range")
-        ax.fill_between(f, col(g, "mean_low[mm^2/Hz]"), col(g, "mean_high[mm^2/Hz]"), color="C0", alpha=0.3, lw=0,
-                        label="95 % interval of the mean")
+        ax.fill_between(f, col(g, "run_low[mm^2/Hz]"), col(g, "run_high[mm^2/Hz]"), color="0.85", lw=0,
+                        label="single runs' 95 % range")
+        if int(info[label]["runs"]) >= 5:  # the normal interval of a mean of fewer runs reaches 0 (log axis)
+            ax.fill_between(f, col(g, "mean_low[mm^2/Hz]"), col(g, "mean_high[mm^2/Hz]"), color="C0", alpha=0.3, lw=0,
+                            label="95 % interval of the mean")
         ax.plot(f, col(g, "mean[mm^2/Hz]"), "C0", lw=0.7, label="mean PSD")
         for k in range(1, 6):
             ax.axvline(k * fm, color="C3", lw=0.6, ls=":", label="k·f$_m$, k = 1…5" if k == 1 else None)
