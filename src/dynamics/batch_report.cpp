@@ -289,8 +289,8 @@ std::string write_over_time(const std::string& folder, const BatchInputs& in, co
   r << "\n## Safety over time (doc/nonlinear-dynamics.md §6)\n\n"
        "The stochastic realizations' recorded series (every state at `monte_carlo.sparse_record_rate`; the dense "
        "realizations on the same times) give P(δ ∈ " << di << " ∧ δ̇ ∈ " << vi << ") and each interval alone at "
-       "every recorded time, with " << pct << " Wilson intervals (safety_over_time.csv, all times). At t = T they "
-       "are Table 4's probabilities.\n\n| " << head << " | n |";
+       "every recorded time, with " << pct << " Wilson intervals (safety_over_time.csv, all times). At t = T the "
+       "two marginals are Table 4's probabilities (the same states).\n\n| " << head << " | n |";
   for (double t : times) r << " P(both) at " << g(t, 6) << " s [" << pct << "] (%) |";
   r << "\n|---|---|";
   for (std::size_t k = 0; k < times.size(); ++k) r << "---|";
@@ -345,6 +345,8 @@ std::string write_over_time(const std::string& folder, const BatchInputs& in, co
     << " normal-approximation interval of the mean, and the pointwise range of the single runs (spectrum_band.csv). "
        "Prominence: the density at k·f_m over the median of the bins 3–10 away (≈ 1: no line; spectrum_peaks.csv).\n\n"
        "| " << head << " | runs | f_m [Hz] | Δf [Hz] | segments |";
+  const bool any_spectrum =
+      std::any_of(o.groups.begin(), o.groups.end(), [](const GroupOverTime& x) { return x.spectrum.has_value(); });
   for (int k = 1; k <= kSpectrumHarmonics; ++k) r << " prominence " << k << " f_m |";
   r << "\n|---|---|---|---|---|";
   for (int k = 1; k <= kSpectrumHarmonics; ++k) r << "---|";
@@ -361,7 +363,7 @@ std::string write_over_time(const std::string& folder, const BatchInputs& in, co
     }
     r << "\n";
   }
-  r << "\n![Spectrum band of δ](spectrum_band.png)\n";
+  r << (any_spectrum ? "\n![Spectrum band of δ](spectrum_band.png)\n" : "\n(none computed: see below)\n");
 
   if (s.kde) {
     r << "\n## Kernel density estimates beside Figs. 11 and 12 (doc/nonlinear-dynamics.md §7)\n\n"
