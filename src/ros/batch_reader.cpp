@@ -552,7 +552,7 @@ BatchInputs read_batches(const std::vector<std::string>& folder_args, const Read
         if (c.record) break;
         if (c.tried) continue;
         // Every stochastic run's states: safety over time, first passage and the spectrum
-        // (doc/gear_aggregator.md §4).
+        // (doc/gear_aggregator.md §5).
         jobs.push_back({c.file, wants_series ? &e : nullptr, e.kind == RunKind::Stochastic});
         round.emplace_back(&c, &entry);
         break;

@@ -1,4 +1,4 @@
-// The batch-level analyses of the aggregator's report over time (doc/gear_aggregator.md §4,
+// The batch-level analyses of the aggregator's report over time (doc/gear_aggregator.md §5,
 // doc/nonlinear-dynamics.md §6, §7): per group of the report (mu, or study point) safety over time
 // with Wilson bands, first passage out of the safe set with its Kaplan-Meier survival curve, the
 // mean Welch PSD of delta over the realizations with a dense series, and KDEs of delta(T) and
