@@ -5,7 +5,8 @@ usage: plot_report.py REPORT_FOLDER [--mu 0.04]
 
 For a study with more axes than mu (points.csv with more than one axis column, doc/studies.md) it
 draws the study's figures instead: axis_<key>.png per swept axis and, for a 2-D grid,
-heatmap_d.png and heatmap_both_in.png.
+heatmap_d.png and heatmap_both_in.png. Both also get the figures over time, one line or panel per
+mu or point: safety_over_time.png, first_passage.png and spectrum_band.png.
 
 Every number comes from the CSV files the aggregator wrote (paper units); this script only draws.
 --mu selects the friction coefficient of the series and joint-PDF figures (the paper's 0.04).
@@ -161,6 +162,7 @@ def pdf_figure(folder, name, unit, label, title, filename, out):
     rows = read(folder, name)
     outside = {(float(r["mu"]), r["quantity"]): float(r["fraction"]) for r in read(folder, "pdf_outside.csv")}
     quantity = "delta_T" if unit == "mm" else "delta_dot_T"
+    kde = read(folder, "kde.csv") if os.path.exists(os.path.join(folder, "kde.csv")) else []
     mus = sorted(set(col(rows, "mu")))
     ncol = min(3, len(mus))
     nrow = int(math.ceil(len(mus) / ncol))
@@ -170,6 +172,11 @@ def pdf_figure(folder, name, unit, label, title, filename, out):
         r = [x for x in rows if float(x["mu"]) == mu]
         edges = col(r, "lo[%s]" % unit) + [float(r[-1]["hi[%s]" % unit])]
         ax.stairs(col(r, density), edges, fill=True, alpha=0.6)
+        k = [x for x in kde if float(x["mu"]) == mu and x["quantity"] == quantity]
+        if k:
+            ax.plot(col(k, "x"), col(k, "density"), "k", lw=0.8,
+                    label="KDE, h = %.2g %s" % (float(k[0]["bandwidth"]), unit))
+            ax.legend(fontsize=6)
         ax.set_title("μ = %g (%.0f %% outside)" % (mu, 100 * outside.get((mu, quantity), 0.0)), fontsize=9)
     for ax in axes[-1]:
         ax.set_xlabel("%s [%s]" % (label, unit))
@@ -179,6 +186,110 @@ def pdf_figure(folder, name, unit, label, title, filename, out):
         ax.axis("off")
     fig.suptitle(title)
     out(fig, filename)
+
+
+def group_label(row, first_data):
+    """The group of a row of the files over time: the key columns before `first_data` ("mu = 0.04",
+    or a study point's axis values)."""
+    keys = list(row.keys())
+    cols = [k for k in keys[:keys.index(first_data)] if k != "point"]
+    return ", ".join("%s = %g" % ("μ" if k == "mu" else k, float(row[k])) for k in cols)
+
+
+def groups_of(rows, first_data):
+    out = {}
+    for r in rows:
+        out.setdefault(group_label(r, first_data), []).append(r)
+    return out
+
+
+def safety_figure(folder, out):
+    rows = read(folder, "safety_over_time.csv")
+    if not rows:
+        return
+    groups = groups_of(rows, "t[s]")
+    fig, axes = plt.subplots(1, 3, figsize=(14, 4), sharey=True)
+    for ax, quantity, title in zip(axes, ("joint", "delta", "delta_dot"),
+                                   (r"P($\delta \in I_\delta \wedge \dot\delta \in I_v$)", r"P($\delta \in I_\delta$)",
+                                    r"P($\dot\delta \in I_v$)")):
+        for label, g in groups.items():
+            q = [r for r in g if r["quantity"] == quantity]
+            t = col(q, "t[s]")
+            line, = ax.plot(t, [100 * v for v in col(q, "estimate")], lw=1, label=label)
+            ax.fill_between(t, [100 * v for v in col(q, "wilson_low")], [100 * v for v in col(q, "wilson_high")],
+                            color=line.get_color(), alpha=0.15, lw=0)
+        ax.set_title(title)
+        ax.set_xlabel("t [s]")
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("probability [%] (95 % Wilson band)")
+    axes[0].legend(fontsize=7)
+    fig.suptitle("Safety over time, stochastic realizations")
+    out(fig, "safety_over_time.png")
+
+
+def first_passage_figure(folder, out):
+    km = read(folder, "survival.csv")
+    if not km:
+        return
+    passage = groups_of(read(folder, "first_passage.csv"), "realization")
+    fig, (ax_s, ax_h) = plt.subplots(1, 2, figsize=(12, 4))
+    for label, g in groups_of(km, "t[s]").items():
+        t = col(g, "t[s]")
+        line, = ax_s.step(t, col(g, "survival"), where="post", lw=1, label=label)
+        ax_s.fill_between(t, col(g, "low"), col(g, "high"), step="post", color=line.get_color(), alpha=0.15, lw=0)
+        exits = [float(r["t[s]"]) for r in passage.get(label, []) if r["event"] == "1"]
+        if exits:
+            ax_h.hist(exits, bins=sorted(set(t)) + [max(t) + 1e-9], histtype="step", color=line.get_color(), label=label)
+    ax_s.set_xlabel("t [s]")
+    ax_s.set_ylabel("S(t): no exit since the settling time")
+    ax_s.set_title("Kaplan–Meier survival (95 % log(−log) band)")
+    ax_s.set_ylim(0, 1.02)
+    ax_s.grid(alpha=0.3)
+    ax_s.legend(fontsize=7)
+    ax_h.set_xlabel("first passage time [s]")
+    ax_h.set_ylabel("realizations")
+    ax_h.set_title("First passage out of the safe set (exits only)")
+    out(fig, "first_passage.png")
+
+
+def spectrum_figure(folder, out):
+    rows = read(folder, "spectrum_band.csv")
+    if not rows:
+        return
+    info = {group_label(r, "mesh_frequency[Hz]"): r for r in read(folder, "spectrum_info.csv")}
+    groups = groups_of(rows, "f[Hz]")
+    ncol = min(3, len(groups))
+    nrow = int(math.ceil(len(groups) / ncol))
+    fig, axes = plt.subplots(nrow, ncol, figsize=(4.5 * ncol, 3.2 * nrow), sharex=True, sharey=True, squeeze=False)
+    for ax, (label, g) in zip(axes.flat, groups.items()):
+        fm = float(info[label]["mesh_frequency[Hz]"])
+        g = [r for r in g if 0 < float(r["f[Hz]"]) <= 15 * fm]  # the harmonics; the CSV goes to Nyquist
+        f = col(g, "f[Hz]")
+        ax.fill_between(f, col(g, "run_low[mm^2/Hz]"), col(g, "run_high[mm^2/Hz]"), color="0.85", lw=0,
+                        label="single runs' 95 % range")
+        if int(info[label]["runs"]) >= 5:  # the normal interval of a mean of fewer runs reaches 0 (log axis)
+            ax.fill_between(f, col(g, "mean_low[mm^2/Hz]"), col(g, "mean_high[mm^2/Hz]"), color="C0", alpha=0.3, lw=0,
+                            label="95 % interval of the mean")
+        ax.plot(f, col(g, "mean[mm^2/Hz]"), "C0", lw=0.7, label="mean PSD")
+        for k in range(1, 6):
+            ax.axvline(k * fm, color="C3", lw=0.6, ls=":", label="k·f$_m$, k = 1…5" if k == 1 else None)
+        ax.set_yscale("log")
+        ax.set_title("%s (%s runs)" % (label, info[label]["runs"]), fontsize=9)
+    for ax in axes[-1]:
+        ax.set_xlabel("f [Hz]")
+    for ax in axes[:, 0]:
+        ax.set_ylabel("PSD of δ [mm²/Hz]")
+    for ax in list(axes.flat)[len(groups):]:
+        ax.axis("off")
+    axes[0, 0].legend(fontsize=7)
+    fig.suptitle("Welch PSD of δ over the dense realizations, f$_m$ = %g Hz" % float(next(iter(info.values()))["mesh_frequency[Hz]"]))
+    out(fig, "spectrum_band.png")
+
+
+def over_time_figures(folder, out):
+    safety_figure(folder, out)
+    first_passage_figure(folder, out)
+    spectrum_figure(folder, out)
 
 
 def axis_columns(points):
@@ -258,6 +369,7 @@ def main():
     study = os.path.exists(points) and len(axis_columns(read(args.folder, "points.csv"))) > 1
     if study:  # a study with more axes than mu: its figures, not the paper's
         study_figures(args.folder, out)
+        over_time_figures(args.folder, out)
         print("plot_report: study figures written to %s" % args.folder)
         return
     series_figures(args.folder, args.mu, out)
@@ -266,6 +378,7 @@ def main():
     pdf_figure(args.folder, "pdf_delta.csv", "mm", "δ(T)", "PDF of δ at T (Fig. 11)", "fig11_pdf_delta.png", out)
     pdf_figure(args.folder, "pdf_delta_dot.csv", "mm/s", r"$\dot{\delta}$(T)", r"PDF of $\dot{\delta}$ at T (Fig. 12)",
                "fig12_pdf_delta_dot.png", out)
+    over_time_figures(args.folder, out)
     print("plot_report: figures written to %s" % args.folder)
 
 

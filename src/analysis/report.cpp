@@ -123,7 +123,7 @@ const std::vector<PaperReference>& paper_reference() {
 }
 
 std::vector<std::string> write_report(const std::string& folder, const BatchInputs& in, const BatchAnalysis& a,
-                                      const StudyAnalysis* study) {
+                                      const StudyAnalysis* study, const std::string& sections) {
   const fs::path dir(folder);
   std::error_code ec;
   fs::create_directories(dir, ec);
@@ -241,7 +241,7 @@ std::vector<std::string> write_report(const std::string& folder, const BatchInpu
     for (const std::string& m : in.missing) c.row(quoted(m), "missing", "");
   }
 
-  if (study) write_study_files(folder, in, *study, s, written);
+  if (study) write_study_files(folder, in, *study, s, written, sections);
   if (study && study->swept()) return written;  // its report.md is organised by axis
 
   // ---- report.md ----
@@ -356,6 +356,8 @@ std::vector<std::string> write_report(const std::string& folder, const BatchInpu
   for (const MuAnalysis& m : a.mu)
     r << "| " << num(m.mu, 2) << " | " << num(100 * m.delta_pdf.fraction_outside(), 1) << " | "
       << num(100 * m.delta_dot_pdf.fraction_outside(), 1) << " |\n";
+
+  r << sections;
 
   r << "\n## Figures\n\n"
        "| paper | figure |\n|---|---|\n"

@@ -179,7 +179,7 @@ BatchAnalysis analyse_batch(const BatchInputs& in, const AnalysisSettings& setti
 }
 
 void write_study_files(const std::string& folder, const BatchInputs& in, const StudyAnalysis& st,
-                       const AnalysisSettings& s, std::vector<std::string>& written) {
+                       const AnalysisSettings& s, std::vector<std::string>& written, const std::string& sections) {
   const fs::path dir(folder);
   const auto open = [&](const std::string& name) {
     const fs::path path = dir / name;
@@ -302,6 +302,7 @@ void write_study_files(const std::string& folder, const BatchInputs& in, const S
   std::vector<std::size_t> varied;
   for (std::size_t a = 0; a < st.axes.size(); ++a)
     if (st.axes[a].values.size() > 1) varied.push_back(a);
+  r << sections;
   r << "\n## Figures\n\n";
   for (std::size_t a : varied)
     r << "- `axis_" << column_name(st.axes[a].key) << ".png`: median d (with its interval), P(d > phase median) and "

@@ -70,7 +70,12 @@ const Section<AnalysisSettings>& analysis_section() {
           .key("joint_delta_dot_bins", GD_MEMBER(joint_delta_dot_bins), any_number(), "m/s",
                "Fig. 10 joint histogram, delta_dot axis [lo, hi, width], as delta_bins")
           .key("joint_times", GD_MEMBER(joint_times), closed_open(0, kInf), "s",
-               "Fig. 10 snapshot times, each among the batch's run.snapshot_times (checked when the runs are analysed)");
+               "Fig. 10 snapshot times, each among the batch's run.snapshot_times (checked when the runs are analysed)")
+          .key("first_passage_settle", GD_MEMBER(first_passage_settle), closed_open(0, kInf), "s",
+               "settling time: first passage out of the safe set counts exits at recorded times >= this (none computed if no time is)")
+          .key("spectrum_transient", GD_MEMBER(spectrum_transient), closed_open(0, kInf), "s",
+               "start-up dropped before the Welch PSD of the dense realizations' delta (none computed if less than a mesh period is left)")
+          .key("kde", GD_MEMBER(kde), "Gaussian KDEs (Silverman's bandwidth) beside the histograms of Figs. 11 and 12");
   return section;
 }
 

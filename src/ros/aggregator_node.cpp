@@ -8,6 +8,7 @@
 #include <filesystem>
 
 #include "gear_dynamics/analysis/study_analysis.hpp"
+#include "gear_dynamics/dynamics/batch_report.hpp"
 #include "gear_dynamics/ros/batch_reader.hpp"
 #include "gear_dynamics/ros/conversions.hpp"
 #include "gear_dynamics/ros/report_message.hpp"
@@ -33,7 +34,13 @@ bool AggregatorNode::run() {
     const BatchInputs inputs = read_batches(settings_.folders, options);
     StudyAnalysis study;  // per point and axis (doc/studies.md); the mu sweep's analysis is analyse()'s
     const BatchAnalysis analysis = analyse_batch(inputs, settings_.analysis, study);
-    write_report(report_folder_, inputs, analysis, &study);
+    // Safety over time, first passage, spectrum band, KDEs: the dynamics layer, above the report's.
+    const BatchOverTime over_time = analyse_over_time(inputs, analysis);
+    for (const std::string& note : over_time.notes) ROS_WARN("gear_aggregator: %s", note.c_str());
+    std::vector<std::string> written;
+    const std::string sections = write_over_time(report_folder_, inputs, analysis, over_time, written);
+    const std::vector<std::string> report = write_report(report_folder_, inputs, analysis, &study, sections);
+    ROS_INFO("gear_aggregator: %zu files written", written.size() + report.size());
     plot();
     publisher_.publish(make_report_message(inputs, analysis, report_folder_));
   } catch (const std::exception& ex) {

@@ -178,16 +178,18 @@ struct BagContents {
   RunInfo info;
   RunSummary summary;
   std::string series;  // GearState rows in the paper's units, if asked for
+  std::vector<double> t, delta, delta_dot;  // every GearState, if asked for (SI)
 };
 
-// Reads one bag (the series rows only if `e` is given). Throws Skip or rosbag's exceptions.
-BagContents read_bag(const fs::path& path, const ManifestRun* e) {
+// Reads one bag (the series rows only if `e` is given, the states only if `states`). Throws Skip or
+// rosbag's exceptions.
+BagContents read_bag(const fs::path& path, const ManifestRun* e, bool states) {
   const auto require = [](bool ok, const std::string& why) {
     if (!ok) throw Skip(why);
   };
   rosbag::Bag bag(path.string(), rosbag::bagmode::Read);
   std::vector<std::string> topics{kRunInfoTopic, kSummaryTopic};
-  if (e) topics.emplace_back(kStateTopic);
+  if (e || states) topics.emplace_back(kStateTopic);
   rosbag::View view(bag, rosbag::TopicQuery(topics));
   BagContents c;
   std::ostringstream rows;
@@ -207,7 +209,13 @@ BagContents read_bag(const fs::path& path, const ManifestRun* e) {
     } else {
       const GearState::ConstPtr s = m.instantiate<GearState>();
       require(s != nullptr, topic + " holds " + m.getDataType() + ", not gear_dynamics/GearState");
-      rows << e->name << ',' << to_string(e->kind) << ',' << e->mu << ',' << e->realization << ',' << s->t << ','
+      if (states) {
+        c.t.push_back(s->t);
+        c.delta.push_back(s->delta);
+        c.delta_dot.push_back(s->delta_dot);
+      }
+      if (e)
+        rows << e->name << ',' << to_string(e->kind) << ',' << e->mu << ',' << e->realization << ',' << s->t << ','
            << s->delta * kToPaperUnits << ',' << s->delta_dot * kToPaperUnits << ',' << s->phi * kToPaperUnits << '\n';
     }
   }
@@ -224,6 +232,9 @@ void fields(Stream& stream, Contents& c) {
   stream.next(c.info);
   stream.next(c.summary);
   stream.next(c.series);
+  stream.next(c.t);
+  stream.next(c.delta);
+  stream.next(c.delta_dot);
 }
 
 std::vector<std::uint8_t> serialize(const BagContents& c) {
@@ -254,10 +265,11 @@ bool write_all(int fd, const void* data, std::size_t size) {
   return true;
 }
 
-// One bag to read, with its series rows if `series_of` is set.
+// One bag to read, with its series rows if `series_of` is set and its states if `states`.
 struct BagJob {
   fs::path file;
   const ManifestRun* series_of = nullptr;
+  bool states = false;
 };
 
 // What came of reading one bag: its contents, or why not.
@@ -291,7 +303,7 @@ std::vector<BagRead> read_bags_isolated(const std::vector<BagJob>& jobs) {
         std::uint8_t status = 0;
         std::vector<std::uint8_t> payload;
         try {
-          payload = serialize(read_bag(jobs[i].file, jobs[i].series_of));
+          payload = serialize(read_bag(jobs[i].file, jobs[i].series_of, jobs[i].states));
         } catch (const std::exception& ex) {
           status = dynamic_cast<const Skip*>(&ex) ? 1 : 2;
           const std::string what = ex.what();
@@ -419,6 +431,9 @@ RunRecord check_run(const BagRead& read, const ManifestRun& e, const Manifest& m
   r.snapshot_times = summary->snapshot_times;
   r.snapshot_delta = summary->snapshot_delta;
   r.snapshot_delta_dot = summary->snapshot_delta_dot;
+  r.series_times = bag.t;
+  r.series_delta = bag.delta;
+  r.series_delta_dot = bag.delta_dot;
   return r;
 }
 
@@ -546,7 +561,9 @@ BatchInputs read_batches(const std::vector<std::string>& folder_args, const Read
       for (Candidate& c : list) {
         if (c.record) break;
         if (c.tried) continue;
-        jobs.push_back({c.file, wants_series ? &e : nullptr});
+        // Every stochastic run's states: safety over time, first passage and the spectrum
+        // (doc/gear_aggregator.md §5).
+        jobs.push_back({c.file, wants_series ? &e : nullptr, e.kind == RunKind::Stochastic});
         round.emplace_back(&c, &entry);
         break;
       }

@@ -8,6 +8,7 @@ error naming the folder.
 Parameters (private): folder (the batch folder), analysis_files (YAML files the aggregator
 loaded, in order), report_timeout [s].
 """
+import csv
 import glob
 import io
 import math
@@ -27,7 +28,7 @@ import rospy
 import rostest
 import rostopic
 import yaml
-from scipy import stats
+from scipy import signal, stats
 
 from gear_dynamics.msg import BatchReport, GearState
 
@@ -58,6 +59,11 @@ def serialized(msg):
     buf = io.BytesIO()
     msg.serialize(buf)
     return buf.getvalue()
+
+
+def read_csv(folder, name):
+    with open(os.path.join(folder, name), newline="") as f:
+        return list(csv.DictReader(f))
 
 
 def load_analysis(files):
@@ -191,6 +197,128 @@ class AggregatorEndToEnd(unittest.TestCase):
         for name in ("report.md", "box_stats.csv", "probabilities.csv", "table3.csv", "pdf_delta.csv", "joint_pdf.csv",
                      "series.csv", "fig09_boxplot.png", "fig10_joint_pdf.png", "fig11_pdf_delta.png"):
             self.assertTrue(os.path.isfile(os.path.join(r.report_folder, name)), name)
+
+    def test_4_over_time_equals_an_independent_computation(self):
+        """Safety over time, first passage and Kaplan-Meier, the spectrum band and the KDEs of the
+        report, recomputed from the bags' /gear/state series (numpy, scipy, by hand)."""
+        r, a = self.report, self.analysis
+        folder = r.report_folder
+        conf = r.confidence
+        z = stats.norm.ppf(0.5 + 0.5 * conf)
+        safety = read_csv(folder, "safety_over_time.csv")
+        passage = read_csv(folder, "first_passage.csv")
+        survival = read_csv(folder, "survival.csv")
+        band = read_csv(folder, "spectrum_band.csv")
+        info = read_csv(folder, "spectrum_info.csv")
+        kde = read_csv(folder, "kde.csv")
+        (dlo, dhi), (vlo, vhi) = a["delta_interval"], a["delta_dot_interval"]
+        settle = a["first_passage_settle"]
+        inside = lambda d, v: (dlo <= d <= dhi) & (vlo <= v <= vhi)  # noqa: E731
+        exits_seen = 0
+        for f in r.friction:
+            mu = "%.10g" % f.mu
+            sto = sorted(((p, s) for p, i, s in self.runs if s.mu == f.mu and i.kind == "stochastic"),
+                         key=lambda x: x[1].realization)
+            series = []
+            for path, _ in sto:
+                with rosbag.Bag(path) as bag:
+                    states = [m for _, m, _ in bag.read_messages(topics=["/gear/state"])]
+                series.append({round(m.t, 9): (m.delta, m.delta_dot) for m in states})
+            times = sorted(set.intersection(*(set(x) for x in series)))
+            T = max(times)
+            self.assertAlmostEqual(T, sto[0][1].snapshot_times[-1], delta=1e-9)
+            # Safety over time: counts at every common time, Wilson intervals by scipy.
+            rows = [x for x in safety if x["mu"] == mu]
+            self.assertEqual(len(rows), 3 * len(times), mu)
+            for row in rows:
+                t = round(float(row["t[s]"]), 9)
+                states = [x[t] for x in series]
+                k = {"joint": sum(inside(d, v) for d, v in states), "delta": sum(dlo <= d <= dhi for d, _ in states),
+                     "delta_dot": sum(vlo <= v <= vhi for _, v in states)}[row["quantity"]]
+                self.assertEqual((int(row["successes"]), int(row["trials"])), (k, len(sto)), "%s at %g s" % (mu, t))
+                ci = stats.binomtest(k, len(sto)).proportion_ci(confidence_level=conf, method="wilson")
+                self.assertTrue(close(float(row["wilson_low"]), ci.low, 1e-9) and close(float(row["wilson_high"]), ci.high, 1e-9))
+            # At t = T the same definition as the final-time probabilities of the report: the
+            # marginals are Table 4's (the latched message), the joint counts the summaries' final states.
+            final = {x["quantity"]: x for x in rows if abs(float(x["t[s]"]) - T) < 1e-9}
+            for quantity, msg in (("delta", f.delta_in_interval), ("delta_dot", f.delta_dot_in_interval)):
+                self.assertEqual((int(final[quantity]["successes"]), int(final[quantity]["trials"])),
+                                 (msg.successes, msg.trials), "%s %s at T" % (mu, quantity))
+                self.assertTrue(close(float(final[quantity]["estimate"]), msg.estimate, 1e-9))
+            self.assertEqual(int(final["joint"]["successes"]),
+                             sum(inside(s.final_delta, s.final_delta_dot) for _, s in sto), mu + " joint at T")
+            # First passage: the first common time >= settle outside the safe set, else censored at T.
+            later = [t for t in times if t >= settle - 1e-9]
+            self.assertGreater(len(later), 1, "the test's settle time must leave several recorded times")
+            expected = []
+            for x in series:
+                hit = [t for t in later if not inside(*x[t])]
+                expected.append((hit[0], 1) if hit else (T, 0))
+            got = [(float(x["t[s]"]), int(x["event"])) for x in passage if x["mu"] == mu]
+            self.assertEqual(len(got), len(expected))
+            for (tg, eg), (te, ee) in zip(got, expected):
+                self.assertAlmostEqual(tg, te, delta=1e-9)
+                self.assertEqual(eg, ee)
+            exits_seen += sum(e for _, e in expected)
+            # Kaplan-Meier by hand: S = prod(1 - d/n) over the event times, Greenwood, log(-log) interval.
+            km = [x for x in survival if x["mu"] == mu]
+            self.assertEqual((float(km[0]["t[s]"]), int(km[0]["at_risk"]), float(km[0]["survival"])),
+                             (settle, len(sto), 1.0))
+            times_e = sorted({t for t, e in expected if e})
+            self.assertEqual(len(km) - 1, len(times_e))
+            s_, gw = 1.0, 0.0
+            for row, t in zip(km[1:], times_e):
+                n = sum(1 for te, _ in expected if te >= t)
+                d = sum(1 for te, e in expected if e and te == t)
+                s_ *= 1 - d / n
+                gw += d / (n * (n - d)) if n > d else 0.0
+                self.assertEqual((int(row["at_risk"]), int(row["events"])), (n, d), "%s KM at %g" % (mu, t))
+                self.assertTrue(close(float(row["survival"]), s_, 1e-12), "%s S(%g)" % (mu, t))
+                if 0 < s_ < 1:
+                    se = math.sqrt(gw) / abs(math.log(s_))
+                    c = math.log(-math.log(s_))
+                    self.assertTrue(close(float(row["low"]), math.exp(-math.exp(c + z * se)), 1e-9))
+                    self.assertTrue(close(float(row["high"]), math.exp(-math.exp(c - z * se)), 1e-9))
+            # Censoring happens only at T, so S(T) is the fraction that never left.
+            censored = sum(1 for _, e in expected if not e)
+            self.assertTrue(close(float(km[-1]["survival"]) if len(km) > 1 else 1.0, censored / len(sto), 1e-12))
+            # Spectrum: scipy's Welch (periodic Hann, 50 % overlap, mean removed) of the dense
+            # realizations' delta after the transient, averaged; in mm^2/Hz.
+            spec = [x for x in info if x["mu"] == mu]
+            self.assertEqual(len(spec), 1, mu)
+            fs, L = float(spec[0]["sample_rate[Hz]"]), int(spec[0]["segment"])
+            dense = [x for x in series if len(x) > len(times)]
+            self.assertEqual(int(spec[0]["runs"]), len(dense))
+            self.assertGreater(len(dense), 0)
+            psd = []
+            for x in dense:
+                ts = sorted(x)
+                y = np.array([x[t][0] for t in ts if t >= a["spectrum_transient"] - 1e-9]) * 1e3
+                fr, p = signal.welch(y, fs=fs, window="hann", nperseg=L, noverlap=L - math.floor(L * 0.5 + 0.5),
+                                     detrend="constant", scaling="density")
+                psd.append(p)
+            mean = np.mean(psd, axis=0)
+            # The CSV has 10 significant digits; the two FFTs' rounding, ~1e-16 of the peak, is up to
+            # ~1e-9 of the smallest bins (7 decades below it): 1e-6 relative leaves a margin.
+            rows = [x for x in band if x["mu"] == mu]
+            self.assertTrue(np.allclose([float(x["f[Hz]"]) for x in rows], fr, rtol=1e-9, atol=0))
+            self.assertTrue(np.allclose([float(x["mean[mm^2/Hz]"]) for x in rows], mean, rtol=1e-6, atol=0), mu + " PSD")
+            # KDE: scipy's gaussian_kde with the bandwidth of Silverman's rule computed here.
+            for quantity, values in (("delta_T", [s.final_delta * 1e3 for _, s in sto]),
+                                     ("delta_dot_T", [s.final_delta_dot * 1e3 for _, s in sto])):
+                v = np.asarray(values)
+                q75, q25 = np.quantile(v, [0.75, 0.25])
+                h = 0.9 * min(np.std(v, ddof=1), (q75 - q25) / 1.34) * len(v) ** -0.2
+                rows = [x for x in kde if x["mu"] == mu and x["quantity"] == quantity]
+                self.assertTrue(close(float(rows[0]["bandwidth"]), h, 1e-9), "%s %s h" % (mu, quantity))
+                grid = np.array([float(x["x"]) for x in rows])
+                want = stats.gaussian_kde(v, bw_method=h / np.std(v, ddof=1))(grid)
+                # 10 significant digits in the CSV; in the far tails both underflow differently.
+                self.assertTrue(np.allclose([float(x["density"]) for x in rows], want, rtol=1e-6, atol=1e-12 * want.max()),
+                                mu + " " + quantity)
+        self.assertGreater(exits_seen, 0, "no realization left the safe set: the first-passage check would be empty")
+        for name in ("safety_over_time.png", "first_passage.png", "spectrum_band.png"):
+            self.assertTrue(os.path.isfile(os.path.join(folder, name)), name)
 
     def test_2_rosbag_play_publishes_the_bags_gear_states(self):
         path = [p for p, info, _ in self.runs if info.kind == "stochastic" and info.realization == 0][0]

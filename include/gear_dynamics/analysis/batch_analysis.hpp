@@ -29,6 +29,9 @@ struct RunRecord {
   bool reached_steady_state = false;  // t_ss < T
   double final_delta = 0, final_delta_dot = 0, final_phi = 0;  // at T [m], [m/s], [m/s^2]
   std::vector<double> snapshot_times, snapshot_delta, snapshot_delta_dot;  // [s], [m], [m/s]
+  // The recorded /gear/state series of a stochastic run (empty for the others): every state at
+  // sparse_record_rate, or at record_rate for the dense realizations. [s], [m], [m/s]
+  std::vector<double> series_times, series_delta, series_delta_dot;
 };
 
 // Statistics of one friction coefficient.

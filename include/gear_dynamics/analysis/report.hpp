@@ -49,8 +49,11 @@ constexpr double kPaperMuExceeds = 0.04;
 // if a file cannot be written. The names of the files written are returned.
 // With `study` (analyse_batch), also points.csv and axis_tests.csv; a study with more axes than mu
 // gets its report.md organised by axis (study_analysis.hpp) instead of the paper's tables.
+// `sections` (markdown, from a layer above: the analyses over time) go into report.md before its
+// figure table.
 struct StudyAnalysis;
 std::vector<std::string> write_report(const std::string& folder, const BatchInputs& inputs,
-                                      const BatchAnalysis& analysis, const StudyAnalysis* study = nullptr);
+                                      const BatchAnalysis& analysis, const StudyAnalysis* study = nullptr,
+                                      const std::string& sections = "");
 
 }  // namespace gear_dynamics

@@ -43,8 +43,10 @@ StudyAnalysis analyse_study(const BatchInputs& inputs, const AnalysisSettings& s
 BatchAnalysis analyse_batch(const BatchInputs& inputs, const AnalysisSettings& settings, StudyAnalysis& study);
 
 // Writes points.csv (one row per point, one column per axis, every statistic) and axis_tests.csv
-// (one row per line of the grid); for a study with more axes also report.md organised by axis.
+// (one row per line of the grid); for a study with more axes also report.md organised by axis,
+// with `sections` (markdown, write_report's) before its figure list.
 void write_study_files(const std::string& folder, const BatchInputs& inputs, const StudyAnalysis& study,
-                       const AnalysisSettings& settings, std::vector<std::string>& written);
+                       const AnalysisSettings& settings, std::vector<std::string>& written,
+                       const std::string& sections = "");
 
 }  // namespace gear_dynamics

@@ -1,0 +1,66 @@
+// The batch-level analyses of the aggregator's report over time (doc/gear_aggregator.md §5,
+// doc/nonlinear-dynamics.md §6, §7): per group of the report (mu, or study point) safety over time
+// with Wilson bands, first passage out of the safe set with its Kaplan-Meier survival curve, the
+// mean Welch PSD of delta over the realizations with a dense series, and KDEs of delta(T) and
+// delta_dot(T). Here, not in `analysis`, because `dynamics` is the layer above it. No ROS.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "gear_dynamics/analysis/report.hpp"
+#include "gear_dynamics/dynamics/safety.hpp"
+#include "gear_dynamics/dynamics/spectrum.hpp"
+
+namespace gear_dynamics {
+
+// Segments of the ensemble PSD: this many mesh periods (fewer if the series is shorter), so every
+// mesh harmonic lies on a bin centre (as gear_analyze spectrum).
+constexpr int kSpectrumSegmentPeriods = 30;
+constexpr int kSpectrumHarmonics = 5;
+// A series is dense enough for the spectrum when its sample rate is at least this many times f_m
+// (harmonics 1..5 below Nyquist); the sparse 100 Hz series is not.
+constexpr double kDenseRateOverMeshFrequency = 2.0 * kSpectrumHarmonics;
+
+struct GroupSpectrum {
+  double mesh_frequency = 0, transient = 0;
+  Psd first;      // the first run's PSD: rate, resolution, segments (the band has the densities)
+  PsdBand band;   // over the runs with the densest series
+  std::vector<SpectralPeak> peaks;  // of the mean PSD
+};
+
+struct Kde {
+  double bandwidth = 0;  // Silverman's rule [SI]
+  std::vector<double> grid, density;
+};
+
+// One group of the report (an entry of BatchAnalysis::mu), its stochastic realizations.
+struct GroupOverTime {
+  std::size_t runs = 0;             // realizations with a series
+  std::vector<std::uint32_t> realizations;  // their indices, in the order of the series below
+  SafetySeries safety;              // at the times every such realization recorded
+  std::optional<FirstPassage> passage;  // none when no recorded time is >= the settling time
+  KaplanMeier survival;
+  std::optional<GroupSpectrum> spectrum;
+  std::optional<Kde> kde_delta, kde_delta_dot;
+};
+
+struct BatchOverTime {
+  std::vector<GroupOverTime> groups;  // parallel to BatchAnalysis::mu
+  std::vector<std::string> notes;     // what could not be computed, and why
+};
+
+BatchOverTime analyse_over_time(const BatchInputs& inputs, const BatchAnalysis& analysis);
+
+// The realizations' series on the times all of them recorded (within 1e-9 s).
+RecordedRuns common_series(const std::vector<const RunRecord*>& runs);
+
+// Writes safety_over_time.csv, first_passage.csv, survival.csv, spectrum_band.csv,
+// spectrum_peaks.csv, spectrum_info.csv and (with analysis.kde) kde.csv, in the paper's units;
+// returns the report.md section. Throws std::runtime_error if a file cannot be written.
+std::string write_over_time(const std::string& folder, const BatchInputs& inputs, const BatchAnalysis& analysis,
+                            const BatchOverTime& over_time, std::vector<std::string>& written);
+
+}  // namespace gear_dynamics

@@ -1,0 +1,385 @@
+#include "gear_dynamics/dynamics/batch_report.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include "gear_dynamics/config/sweep.hpp"
+#include "gear_dynamics/dynamics/bifurcation.hpp"
+
+namespace gear_dynamics {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr double U = kToPaperUnits;
+constexpr double kTimeMatch = 1e-9;  // [s] series times are n h, as the snapshot times
+constexpr std::size_t kKdePoints = 201;
+
+std::string g(double x, int digits = 10) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*g", digits, x);
+  return buf;
+}
+
+std::string fixed(double x, int decimals) {
+  if (std::isnan(x)) return "–";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, x);
+  return buf;
+}
+
+std::string percent(const Proportion& p) {
+  if (p.trials == 0) return "–";
+  return fixed(100 * p.estimate, 1) + " [" + fixed(100 * p.low, 1) + ", " + fixed(100 * p.high, 1) + "]";
+}
+
+// The stochastic realizations of group i of the analysis: by mu in the mu sweep, by point in a study.
+std::vector<const RunRecord*> group_runs(const BatchInputs& in, const BatchAnalysis& a, std::size_t i) {
+  std::vector<const RunRecord*> out;
+  for (const RunRecord& r : in.runs)
+    if (r.kind == RunKind::Stochastic && (a.keys.empty() ? r.mu == a.mu[i].mu : r.point == i)) out.push_back(&r);
+  std::sort(out.begin(), out.end(), [](const RunRecord* x, const RunRecord* y) { return x->index < y->index; });
+  return out;
+}
+
+// The model of group i (a study point may change the speed, hence f_m).
+ModelConfig group_config(const BatchInputs& in, const BatchAnalysis& a, std::size_t i) {
+  if (a.keys.empty() || in.points.size() <= i) return in.config;
+  std::vector<std::string> keys;
+  for (const SweepAxis& axis : in.axes) keys.push_back(axis.key);
+  return apply_point(in.config, keys, in.points[i]);
+}
+
+double sample_rate(const RunRecord& r) {
+  const std::size_t n = r.series_times.size();
+  return n < 2 ? 0.0 : static_cast<double>(n - 1) / (r.series_times.back() - r.series_times.front());
+}
+
+// The mean PSD of delta over the group's densest series, if they resolve the mesh harmonics.
+std::optional<GroupSpectrum> spectrum_of(const std::vector<const RunRecord*>& runs, const ModelConfig& c,
+                                         double transient, std::string& why_not) {
+  GroupSpectrum s;
+  s.mesh_frequency = 1.0 / mesh_period(derive(c.gear));
+  s.transient = transient;
+  double fs = 0;
+  for (const RunRecord* r : runs) fs = std::max(fs, sample_rate(*r));
+  if (fs < kDenseRateOverMeshFrequency * s.mesh_frequency) {
+    why_not = "no realization has a series at >= " + g(kDenseRateOverMeshFrequency, 3) + " f_m = " +
+              g(kDenseRateOverMeshFrequency * s.mesh_frequency, 4) + " Hz (monte_carlo.record_rate, record_realizations)";
+    return std::nullopt;
+  }
+  const double left = c.run.duration - transient;
+  const int periods = std::min(kSpectrumSegmentPeriods, static_cast<int>(std::floor(left * s.mesh_frequency + 1e-9)));
+  if (periods < 1) {
+    why_not = "analysis.spectrum_transient = " + g(transient, 6) + " s leaves less than one mesh period of T = " +
+              g(c.run.duration, 6) + " s";
+    return std::nullopt;
+  }
+  const WelchOptions options{static_cast<std::size_t>(std::llround(periods * fs / s.mesh_frequency)), 0.5};
+  std::vector<Psd> psds;
+  for (const RunRecord* r : runs) {
+    if (std::abs(sample_rate(*r) - fs) > 1e-6 * fs) continue;
+    std::vector<double> x;
+    for (std::size_t j = 0; j < r->series_times.size(); ++j)
+      if (r->series_times[j] >= transient - kTimeMatch) x.push_back(r->series_delta[j]);
+    psds.push_back(welch_psd(x, fs, options));
+  }
+  s.first = psds.front();
+  s.band = psd_band(psds);
+  s.peaks = mark_peaks(s.band.frequency, s.band.mean, s.mesh_frequency, kSpectrumHarmonics);
+  return s;
+}
+
+Kde kde_of(const std::vector<const RunRecord*>& runs, double RunRecord::*value, const BinSpec& range) {
+  std::vector<double> x;
+  for (const RunRecord* r : runs) x.push_back(r->*value);
+  Kde k;
+  k.bandwidth = silverman_bandwidth(x);
+  for (std::size_t i = 0; i < kKdePoints; ++i)
+    k.grid.push_back(range.lo + (range.hi - range.lo) * static_cast<double>(i) / (kKdePoints - 1));
+  k.density = gaussian_kde(x, k.grid, k.bandwidth);
+  return k;
+}
+
+class CsvFile {
+ public:
+  CsvFile(const fs::path& path, std::vector<std::string>& written, const std::string& header) : path_(path), out_(path) {
+    if (!out_) throw std::runtime_error("cannot write " + path.string());
+    written.push_back(path.string());
+    out_ << header << '\n';
+  }
+  ~CsvFile() noexcept(false) {
+    out_.close();
+    if (!out_ && std::uncaught_exceptions() == 0) throw std::runtime_error("error writing " + path_.string());
+  }
+  std::ostream& row(const std::string& key) { return out_ << key; }
+
+ private:
+  fs::path path_;
+  std::ofstream out_;
+};
+
+}  // namespace
+
+RecordedRuns common_series(const std::vector<const RunRecord*>& runs) {
+  RecordedRuns out;
+  if (runs.empty()) return out;
+  // The shortest series' times, kept where every run has a state.
+  const RunRecord* shortest = *std::min_element(runs.begin(), runs.end(), [](const RunRecord* x, const RunRecord* y) {
+    return x->series_times.size() < y->series_times.size();
+  });
+  std::vector<std::vector<std::size_t>> at(runs.size());
+  std::vector<std::size_t> cursor(runs.size(), 0);
+  for (double t : shortest->series_times) {
+    bool everywhere = true;
+    for (std::size_t r = 0; r < runs.size(); ++r) {
+      const std::vector<double>& ts = runs[r]->series_times;
+      std::size_t& j = cursor[r];
+      while (j < ts.size() && ts[j] < t - kTimeMatch) ++j;
+      everywhere = everywhere && j < ts.size() && std::abs(ts[j] - t) <= kTimeMatch;
+    }
+    if (!everywhere) continue;
+    out.time.push_back(t);
+    for (std::size_t r = 0; r < runs.size(); ++r) at[r].push_back(cursor[r]);
+  }
+  for (std::size_t r = 0; r < runs.size(); ++r) {
+    out.delta.emplace_back();
+    out.velocity.emplace_back();
+    for (std::size_t j : at[r]) {
+      out.delta.back().push_back(runs[r]->series_delta[j]);
+      out.velocity.back().push_back(runs[r]->series_delta_dot[j]);
+    }
+  }
+  return out;
+}
+
+BatchOverTime analyse_over_time(const BatchInputs& in, const BatchAnalysis& a) {
+  const AnalysisSettings& s = a.settings;
+  BatchOverTime out;
+  for (std::size_t i = 0; i < a.mu.size(); ++i) {
+    const std::string label = a.keys.empty() ? "mu = " + g(a.mu[i].mu, 6) : "point " + a.keys[i];
+    const std::vector<const RunRecord*> all = group_runs(in, a, i);
+    std::vector<const RunRecord*> runs;
+    for (const RunRecord* r : all)
+      if (!r->series_times.empty()) runs.push_back(r);
+    GroupOverTime grp;
+    grp.runs = runs.size();
+    for (const RunRecord* r : runs) grp.realizations.push_back(r->index);
+    const RecordedRuns series = common_series(runs);
+    if (series.time.empty()) {
+      if (!all.empty()) out.notes.push_back(label + ": no recorded series common to the realizations (sparse_record_rate 0?): no safety over time, first passage or spectrum");
+    } else {
+      grp.safety = safety_over_time(series, s.delta_interval, s.delta_dot_interval, s.confidence);
+      if (series.time.back() >= s.first_passage_settle - kTimeMatch) {
+        grp.passage = first_passage(series, s.delta_interval, s.delta_dot_interval, s.first_passage_settle - kTimeMatch);
+        grp.survival = kaplan_meier(grp.passage->time, grp.passage->event, s.confidence);
+      } else {
+        out.notes.push_back(label + ": analysis.first_passage_settle = " + g(s.first_passage_settle, 6) +
+                            " s is after the last recorded time " + g(series.time.back(), 6) + " s: no first passage");
+      }
+      std::string why_not;
+      grp.spectrum = spectrum_of(runs, group_config(in, a, i), s.spectrum_transient, why_not);
+      if (!grp.spectrum) out.notes.push_back(label + ": no spectrum: " + why_not);
+    }
+    if (s.kde && all.size() >= 2) {
+      grp.kde_delta = kde_of(all, &RunRecord::final_delta, s.delta_bins);
+      grp.kde_delta_dot = kde_of(all, &RunRecord::final_delta_dot, s.delta_dot_bins);
+    }
+    out.groups.push_back(std::move(grp));
+  }
+  return out;
+}
+
+std::string write_over_time(const std::string& folder, const BatchInputs& in, const BatchAnalysis& a,
+                            const BatchOverTime& o, std::vector<std::string>& written) {
+  const fs::path dir(folder);
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw std::runtime_error("cannot create report folder " + folder + ": " + ec.message());
+  const AnalysisSettings& s = a.settings;
+  const std::string kh = a.key_header.empty() ? "mu" : a.key_header;
+  const auto key = [&](std::size_t i) { return a.keys.empty() ? g(a.mu[i].mu) : a.keys[i]; };
+  {
+    CsvFile c(dir / "safety_over_time.csv", written,
+              kh + ",t[s],quantity,successes,trials,estimate,wilson_low,wilson_high");
+    for (std::size_t i = 0; i < o.groups.size(); ++i) {
+      const SafetySeries& ss = o.groups[i].safety;
+      for (std::size_t j = 0; j < ss.time.size(); ++j)
+        for (const auto& [name, p] : {std::pair<const char*, const Proportion&>{"joint", ss.joint[j]},
+                                      {"delta", ss.delta_only[j]}, {"delta_dot", ss.velocity_only[j]}})
+          c.row(key(i)) << ',' << g(ss.time[j]) << ',' << name << ',' << p.successes << ',' << p.trials << ','
+                        << g(p.estimate) << ',' << g(p.low) << ',' << g(p.high) << '\n';
+    }
+  }
+  {
+    CsvFile fp(dir / "first_passage.csv", written, kh + ",realization,t[s],event");
+    CsvFile km(dir / "survival.csv", written, kh + ",t[s],at_risk,events,survival,low,high");
+    for (std::size_t i = 0; i < o.groups.size(); ++i) {
+      const GroupOverTime& grp = o.groups[i];
+      if (!grp.passage) continue;
+      for (std::size_t r = 0; r < grp.realizations.size(); ++r)
+        fp.row(key(i)) << ',' << grp.realizations[r] << ',' << g(grp.passage->time[r]) << ','
+                       << (grp.passage->event[r] ? 1 : 0) << '\n';
+      // First row: the settling time, where every realization is at risk and S = 1.
+      km.row(key(i)) << ',' << g(s.first_passage_settle) << ',' << grp.passage->time.size() << ",0,1,1,1\n";
+      const KaplanMeier& k = grp.survival;
+      for (std::size_t j = 0; j < k.time.size(); ++j)
+        km.row(key(i)) << ',' << g(k.time[j]) << ',' << k.at_risk[j] << ',' << k.events[j] << ',' << g(k.survival[j])
+                       << ',' << g(k.low[j]) << ',' << g(k.high[j]) << '\n';
+    }
+  }
+  {
+    const double U2 = U * U;
+    CsvFile band(dir / "spectrum_band.csv", written,
+                 kh + ",f[Hz],mean[mm^2/Hz],mean_low[mm^2/Hz],mean_high[mm^2/Hz],run_low[mm^2/Hz],run_high[mm^2/Hz]");
+    CsvFile peaks(dir / "spectrum_peaks.csv", written,
+                  kh + ",f[Hz],density[mm^2/Hz],harmonic,offset[Hz],is_harmonic,prominence");
+    CsvFile info(dir / "spectrum_info.csv", written,
+                 kh + ",mesh_frequency[Hz],sample_rate[Hz],resolution[Hz],enbw[Hz],segment,overlap,segments,runs,"
+                      "transient[s]");
+    for (std::size_t i = 0; i < o.groups.size(); ++i) {
+      if (!o.groups[i].spectrum) continue;
+      const GroupSpectrum& sp = *o.groups[i].spectrum;
+      const PsdBand& b = sp.band;
+      for (std::size_t k = 0; k < b.frequency.size(); ++k)
+        band.row(key(i)) << ',' << g(b.frequency[k]) << ',' << g(b.mean[k] * U2) << ',' << g(b.mean_low[k] * U2) << ','
+                         << g(b.mean_high[k] * U2) << ',' << g(b.run_low[k] * U2) << ',' << g(b.run_high[k] * U2) << '\n';
+      for (const SpectralPeak& p : sp.peaks)
+        peaks.row(key(i)) << ',' << g(p.frequency) << ',' << g(p.density * U2) << ',' << p.harmonic << ','
+                          << g(p.offset) << ',' << (p.is_harmonic ? 1 : 0) << ',' << g(p.prominence) << '\n';
+      info.row(key(i)) << ',' << g(sp.mesh_frequency) << ',' << g(sp.first.sample_rate) << ',' << g(sp.first.resolution)
+                       << ',' << g(sp.first.enbw) << ',' << sp.first.segment << ',' << g(sp.first.overlap) << ','
+                       << sp.first.segments << ',' << b.runs << ',' << g(sp.transient) << '\n';
+    }
+  }
+  if (s.kde) {
+    CsvFile c(dir / "kde.csv", written, kh + ",quantity,unit,bandwidth,x,density");
+    for (std::size_t i = 0; i < o.groups.size(); ++i)
+      for (const auto& [name, unit, kde] : {std::tuple<const char*, const char*, const std::optional<Kde>&>{
+                                                "delta_T", "mm", o.groups[i].kde_delta},
+                                            {"delta_dot_T", "mm/s", o.groups[i].kde_delta_dot}})
+        if (kde)
+          for (std::size_t k = 0; k < kde->grid.size(); ++k)
+            c.row(key(i)) << ',' << name << ',' << unit << ',' << g(kde->bandwidth * U) << ',' << g(kde->grid[k] * U)
+                          << ',' << g(kde->density[k] / U) << '\n';
+  }
+
+  // ---- the report.md section ----
+  std::ostringstream r;
+  const std::string pct = std::to_string(static_cast<int>(std::lround(100 * s.confidence))) + " %";
+  const auto label = [&](std::size_t i) { return a.keys.empty() ? fixed(a.mu[i].mu, 2) : a.keys[i]; };
+  std::string head = a.keys.empty() ? "μ" : kh;
+  for (std::size_t p = head.find(','); p != std::string::npos; p = head.find(',', p + 2)) head.replace(p, 1, ", ");
+  const std::string di = "[" + fixed(s.delta_interval.lo * U, 4) + ", " + fixed(s.delta_interval.hi * U, 4) + "] mm";
+  const std::string vi = "[" + fixed(s.delta_dot_interval.lo * U, 1) + ", " + fixed(s.delta_dot_interval.hi * U, 1) + "] mm/s";
+  // Columns of the safety table: the snapshot times on the common grid, so t = T is among them.
+  std::vector<double> times;
+  for (double t : in.config.run.snapshot_times)
+    for (const GroupOverTime& grp : o.groups)
+      if (std::any_of(grp.safety.time.begin(), grp.safety.time.end(), [&](double x) { return std::abs(x - t) <= 1e-6; })) {
+        times.push_back(t);
+        break;
+      }
+  r << "\n## Safety over time (doc/nonlinear-dynamics.md §6)\n\n"
+       "The stochastic realizations' recorded series (every state at `monte_carlo.sparse_record_rate`; the dense "
+       "realizations on the same times) give P(δ ∈ " << di << " ∧ δ̇ ∈ " << vi << ") and each interval alone at "
+       "every recorded time, with " << pct << " Wilson intervals (safety_over_time.csv, all times). At t = T the "
+       "two marginals are Table 4's probabilities (the same states).\n\n| " << head << " | n |";
+  for (double t : times) r << " P(both) at " << g(t, 6) << " s [" << pct << "] (%) |";
+  r << "\n|---|---|";
+  for (std::size_t k = 0; k < times.size(); ++k) r << "---|";
+  r << "\n";
+  for (std::size_t i = 0; i < o.groups.size(); ++i) {
+    const SafetySeries& ss = o.groups[i].safety;
+    r << "| " << label(i) << " | " << o.groups[i].runs << " |";
+    for (double t : times) {
+      std::size_t j = 0;
+      while (j < ss.time.size() && std::abs(ss.time[j] - t) > 1e-6) ++j;
+      r << " " << (j < ss.time.size() ? percent(ss.joint[j]) : "–") << " |";
+    }
+    r << "\n";
+  }
+  r << "\n![Safety over time](safety_over_time.png)\n";
+
+  r << "\n## First passage out of the safe set\n\n"
+       "Per realization, the first recorded time t ≥ " << g(s.first_passage_settle, 6) << " s "
+       "(`analysis.first_passage_settle`, after the start-up) at which (δ, δ̇) is outside the safe set above; a "
+       "realization that stays inside is censored at the last recorded time. Excursions between two records are not "
+       "seen, so this is the first passage of the recorded series (an upper bound of the true one). Kaplan–Meier "
+       "survival S(t) = P(no exit in [settle, t]) with Greenwood's variance and the log(−log) " << pct << " interval "
+       "(first_passage.csv, survival.csv).\n\n"
+       "| " << head << " | n | exits | censored | S(T) [" << pct << "] | median first passage [s] |\n"
+       "|---|---|---|---|---|---|\n";
+  for (std::size_t i = 0; i < o.groups.size(); ++i) {
+    const GroupOverTime& grp = o.groups[i];
+    if (!grp.passage) {
+      r << "| " << label(i) << " | " << grp.runs << " | – | – | – | – |\n";
+      continue;
+    }
+    const std::size_t exits = static_cast<std::size_t>(std::count(grp.passage->event.begin(), grp.passage->event.end(), true));
+    const KaplanMeier& k = grp.survival;
+    std::string median = "> T";
+    for (std::size_t j = 0; j < k.time.size(); ++j)
+      if (k.survival[j] <= 0.5) {
+        median = g(k.time[j], 6);
+        break;
+      }
+    const std::string st = k.time.empty() ? "1" : fixed(k.survival.back(), 3) + " [" + fixed(k.low.back(), 3) + ", " +
+                                                      fixed(k.high.back(), 3) + "]";
+    r << "| " << label(i) << " | " << grp.passage->time.size() << " | " << exits << " | "
+      << grp.passage->time.size() - exits << " | " << st << " | " << median << " |\n";
+  }
+  r << "\n![First passage and Kaplan–Meier survival](first_passage.png)\n";
+
+  r << "\n## Spectrum of δ (doc/nonlinear-dynamics.md §2)\n\n"
+       "Mean one-sided Welch PSD of δ over the realizations with a dense series (S2, S3, … at "
+       "`monte_carlo.record_rate`), after t = " << g(s.spectrum_transient, 6) << " s (`analysis.spectrum_transient`): "
+       "periodic Hann window, segments of " << kSpectrumSegmentPeriods << " mesh periods (fewer if the series is "
+       "shorter) overlapping by 50 %, so every harmonic k·f_m is a bin centre. Band: the " << pct
+    << " normal-approximation interval of the mean, and the pointwise range of the single runs (spectrum_band.csv). "
+       "Prominence: the density at k·f_m over the median of the bins 3–10 away (≈ 1: no line; spectrum_peaks.csv).\n\n"
+       "| " << head << " | runs | f_m [Hz] | Δf [Hz] | segments |";
+  const bool any_spectrum =
+      std::any_of(o.groups.begin(), o.groups.end(), [](const GroupOverTime& x) { return x.spectrum.has_value(); });
+  for (int k = 1; k <= kSpectrumHarmonics; ++k) r << " prominence " << k << " f_m |";
+  r << "\n|---|---|---|---|---|";
+  for (int k = 1; k <= kSpectrumHarmonics; ++k) r << "---|";
+  r << "\n";
+  for (std::size_t i = 0; i < o.groups.size(); ++i) {
+    if (!o.groups[i].spectrum) continue;
+    const GroupSpectrum& sp = *o.groups[i].spectrum;
+    r << "| " << label(i) << " | " << sp.band.runs << " | " << fixed(sp.mesh_frequency, 1) << " | "
+      << fixed(sp.first.resolution, 2) << " | " << sp.first.segments << " |";
+    for (int k = 1; k <= kSpectrumHarmonics; ++k) {
+      const auto p = std::find_if(sp.peaks.begin(), sp.peaks.end(),
+                                  [&](const SpectralPeak& x) { return x.is_harmonic && x.harmonic == k; });
+      r << " " << (p == sp.peaks.end() ? "–" : fixed(p->prominence, 2)) << " |";
+    }
+    r << "\n";
+  }
+  r << (any_spectrum ? "\n![Spectrum band of δ](spectrum_band.png)\n" : "\n(none computed: see below)\n");
+
+  if (s.kde) {
+    r << "\n## Kernel density estimates beside Figs. 11 and 12 (doc/nonlinear-dynamics.md §7)\n\n"
+         "Gaussian kernel, bandwidth by Silverman's rule of thumb h = 0.9·min(sd, IQR/1.34)·n^(−1/5) (kde.csv), "
+         "drawn over the histograms. A kernel smears the hard edge of δ at contact over about one bandwidth.\n\n"
+         "| " << head << " | n | h for δ(T) [mm] | h for δ̇(T) [mm/s] |\n|---|---|---|---|\n";
+    for (std::size_t i = 0; i < o.groups.size(); ++i)
+      if (o.groups[i].kde_delta)
+        r << "| " << label(i) << " | " << a.mu[i].stochastic_runs << " | " << g(o.groups[i].kde_delta->bandwidth * U, 3)
+          << " | " << g(o.groups[i].kde_delta_dot->bandwidth * U, 3) << " |\n";
+  }
+  if (!o.notes.empty()) {
+    r << "\nNot computed:\n\n";
+    for (const std::string& n : o.notes) r << "- " << n << "\n";
+  }
+  return r.str();
+}
+
+}  // namespace gear_dynamics
