@@ -4,21 +4,13 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "gear_dynamics/engine/rk4_kernel.hpp"
+
 namespace gear_dynamics {
-
-namespace {
-
-// Ensemble's acceleration() for one lane, the same operations in the same order (doc/model.md §2).
-inline double acceleration(double d, double v, double load, double stiffness, double q, double b, double alpha) {
-  const double g = d - std::min(std::max(d, -b), b);
-  return load - q * (stiffness * g + (alpha * std::abs(g)) * v);
-}
-
-}  // namespace
 
 double mesh_force(const GearPair& gear, double stiffness, double delta, double delta_dot) {
   const double b = gear.in.backlash;
-  const double g = delta - std::min(std::max(delta, -b), b);
+  const double g = delta - kernel::clamp(delta, b);
   return stiffness * g + (gear.damping_coefficient * std::abs(g)) * delta_dot;
 }
 
@@ -43,27 +35,11 @@ GearLanes::GearLanes(const std::vector<GearLaneSpec>& lanes, double time_step) :
   }
 }
 
-// Ensemble::step() for sigma = drift = 0: load1 = load0, so every stage load is the lane's load.
+// Ensemble::step() for sigma = drift = 0 through the same kernel: load0 = load1, so every stage load
+// is the lane's load.
 void GearLanes::step_lane(int i, const StepPlan& plan) {
-  const double b = b_[i], alpha = alpha_[i], q3 = q3_[i], mu = mu_[i], load = load_[i];
   double d = d_[i], v = v_[i];
-  for (int s = 0; s < plan.segments; ++s) {
-    const StepSegment& seg = plan.segment[s];
-    const double H = (seg.end - seg.begin) * h_, half = 0.5 * H;
-    const double qa = q3 + mu * seg.friction_start;
-    const double qm = q3 + mu * seg.friction_mid;
-    const double qb = q3 + mu * seg.friction_end;
-    const double K = seg.stiffness;
-    const double a1 = acceleration(d, v, load, K, qa, b, alpha);
-    const double v2 = v + half * a1;
-    const double a2 = acceleration(d + half * v, v2, load, K, qm, b, alpha);
-    const double v3 = v + half * a2;
-    const double a3 = acceleration(d + half * v2, v3, load, K, qm, b, alpha);
-    const double v4 = v + H * a3;
-    const double a4 = acceleration(d + H * v3, v4, load, K, qb, b, alpha);
-    d += (H / 6.0) * (v + 2.0 * v2 + 2.0 * v3 + v4);
-    v += (H / 6.0) * (a1 + 2.0 * a2 + 2.0 * a3 + a4);
-  }
+  kernel::rk4_step<double>(plan, h_, b_[i], alpha_[i], q3_[i], mu_[i], load_[i], load_[i], d, v);
   d_[i] = d;
   v_[i] = v;
 }
