@@ -1,5 +1,6 @@
 #include "gear_dynamics/analysis/report.hpp"
 
+#include "gear_dynamics/analysis/report_text.hpp"
 #include "gear_dynamics/analysis/study_analysis.hpp"
 
 #include <cmath>
@@ -15,32 +16,17 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr double U = kToPaperUnits;
+using report_text::fixed;
+using report_text::general;
+using report_text::percent;
 
-std::string num(double x, int decimals) {
-  if (std::isnan(x)) return "–";
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, x);
-  return buf;
-}
+constexpr double U = kToPaperUnits;
 
 // A CSV field that may hold commas or quotes (RFC 4180).
 std::string quoted(const std::string& text) {
   std::string q = "\"";
   for (char ch : text) q += ch == '"' ? std::string("\"\"") : std::string(1, ch);
   return q + "\"";
-}
-
-std::string csv_num(double x) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.10g", x);
-  return buf;
-}
-
-// A percentage with its interval: "93.0 [85.0, 96.5]".
-std::string percent(const Proportion& p) {
-  if (p.trials == 0) return "–";
-  return num(100 * p.estimate, 1) + " [" + num(100 * p.low, 1) + ", " + num(100 * p.high, 1) + "]";
 }
 
 const PaperReference* paper_at(double mu) {
@@ -80,7 +66,7 @@ class Csv {
   }
 
  private:
-  static std::string field(double x) { return csv_num(x); }
+  static std::string field(double x) { return general(x); }
   static std::string field(const std::string& s) { return s; }
   static std::string field(const char* s) { return s; }
   template <class I, class = std::enable_if_t<std::is_integral_v<I>>>
@@ -103,12 +89,12 @@ void probability_row(Csv& csv, const std::string& mu, const char* quantity, cons
 }
 
 std::string interval_text(const Interval& i, int decimals) {
-  return "[" + num(i.lo * U, decimals) + ", " + num(i.hi * U, decimals) + "]";
+  return "[" + fixed(i.lo * U, decimals) + ", " + fixed(i.hi * U, decimals) + "]";
 }
 
 std::string median_with_interval(const BoxStats& b, int decimals) {
   if (b.n == 0) return "–";
-  return num(b.median * U, decimals) + " [" + num(b.median_low * U, decimals) + ", " + num(b.median_high * U, decimals) + "]";
+  return fixed(b.median * U, decimals) + " [" + fixed(b.median_low * U, decimals) + ", " + fixed(b.median_high * U, decimals) + "]";
 }
 
 double optional_value(const std::optional<double>& v) { return v ? *v : std::nan(""); }
@@ -134,7 +120,7 @@ std::vector<std::string> write_report(const std::string& folder, const BatchInpu
   // Row keys: mu for the mu sweep (as before studies), else the point and its values.
   const std::string kh = a.key_header.empty() ? "mu" : a.key_header;
   const auto key = [&](const MuAnalysis& m) {
-    return a.keys.empty() ? csv_num(m.mu) : a.keys.at(static_cast<std::size_t>(&m - a.mu.data()));
+    return a.keys.empty() ? general(m.mu) : a.keys.at(static_cast<std::size_t>(&m - a.mu.data()));
   };
 
   {
@@ -179,15 +165,15 @@ std::vector<std::string> write_report(const std::string& folder, const BatchInpu
       const PaperReference* p = a.keys.empty() ? paper_at(m.mu) : nullptr;  // a study's points are not the paper's
       const double nan = std::nan("");
       const double p93 = p && std::abs(m.mu - kPaperMuExceeds) < 1e-9 ? kPaperExceedsS1 : nan;
-      probability_row(c, key(m), "d>d_S1", m.s1 ? csv_num(m.s1->center_distance * U) + " mm*s^-1/2" : "no S1",
+      probability_row(c, key(m), "d>d_S1", m.s1 ? general(m.s1->center_distance * U) + " mm*s^-1/2" : "no S1",
                       m.d_exceeds_s1, p93);
-      probability_row(c, key(m), "d>median_phase_d", csv_num(m.phase_center_distance.median * U) + " mm*s^-1/2",
+      probability_row(c, key(m), "d>median_phase_d", general(m.phase_center_distance.median * U) + " mm*s^-1/2",
                       m.d_exceeds_phase_median, nan);
       probability_row(c, key(m), "delta_T_in", interval_text(s.delta_interval, 4) + " mm", m.delta_in_interval,
                       p && paper_table4 ? p->p_delta / 100 : nan);
       probability_row(c, key(m), "delta_dot_T_in", interval_text(s.delta_dot_interval, 1) + " mm/s",
                       m.delta_dot_in_interval, p && paper_table4 ? p->p_delta_dot / 100 : nan);
-      probability_row(c, key(m), "t_ss<T", "T = " + csv_num(in.config.run.duration) + " s", m.reached_steady_state, nan);
+      probability_row(c, key(m), "t_ss<T", "T = " + general(in.config.run.duration) + " s", m.reached_steady_state, nan);
     }
   }
   {
@@ -272,10 +258,10 @@ std::vector<std::string> write_report(const std::string& folder, const BatchInpu
        "|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const MuAnalysis& m : a.mu) {
     const BoxStats& b = m.center_distance;
-    r << "| " << num(m.mu, 2) << " | " << b.n << " | " << num(b.min * U, 3) << " | " << num(b.q1 * U, 3) << " | "
-      << median_with_interval(b, 3) << " | " << num(b.q3 * U, 3) << " | " << num(b.max * U, 3) << " | "
-      << (m.s1 ? num(m.s1->center_distance * U, 3) : "–") << " | " << num(optional_value(m.s2_center_distance) * U, 3)
-      << " | " << num(optional_value(m.s3_center_distance) * U, 3) << " | "
+    r << "| " << fixed(m.mu, 2) << " | " << b.n << " | " << fixed(b.min * U, 3) << " | " << fixed(b.q1 * U, 3) << " | "
+      << median_with_interval(b, 3) << " | " << fixed(b.q3 * U, 3) << " | " << fixed(b.max * U, 3) << " | "
+      << (m.s1 ? fixed(m.s1->center_distance * U, 3) : "–") << " | " << fixed(optional_value(m.s2_center_distance) * U, 3)
+      << " | " << fixed(optional_value(m.s3_center_distance) * U, 3) << " | "
       << median_with_interval(m.phase_center_distance, 3) << " (" << m.phase_runs << ") |\n";
   }
 
@@ -287,8 +273,8 @@ std::vector<std::string> write_report(const std::string& folder, const BatchInpu
     << "] (%) |\n|---|---|---|---|---|---|---|\n";
   for (const MuAnalysis& m : a.mu) {
     const bool at_paper = std::abs(m.mu - kPaperMuExceeds) < 1e-9;
-    r << "| " << num(m.mu, 2) << " | " << m.d_exceeds_s1.successes << "/" << m.d_exceeds_s1.trials << " | "
-      << percent(m.d_exceeds_s1) << " | " << (at_paper ? num(100 * kPaperExceedsS1, 0) : "–") << " | "
+    r << "| " << fixed(m.mu, 2) << " | " << m.d_exceeds_s1.successes << "/" << m.d_exceeds_s1.trials << " | "
+      << percent(m.d_exceeds_s1) << " | " << (at_paper ? fixed(100 * kPaperExceedsS1, 0) : "–") << " | "
       << (at_paper ? inside(kPaperExceedsS1, m.d_exceeds_s1) : "") << " | " << m.d_exceeds_phase_median.successes << "/"
       << m.d_exceeds_phase_median.trials << " | " << percent(m.d_exceeds_phase_median) << " |\n";
   }
@@ -301,10 +287,10 @@ std::vector<std::string> write_report(const std::string& folder, const BatchInpu
        "| test | statistic | df | n | p-value |\n|---|---|---|---|---|\n";
   for (const auto& [name, t] : {std::pair<const char*, const RankTest&>{"Kruskal–Wallis H", a.kruskal_wallis},
                                 {"Friedman χ² (blocks = realizations)", a.friedman}}) {
-    r << "| " << name << " | " << (t.valid ? num(t.statistic, 3) : "–") << " | " << t.df << " | " << t.n << " | ";
+    r << "| " << name << " | " << (t.valid ? fixed(t.statistic, 3) : "–") << " | " << t.df << " | " << t.n << " | ";
     if (!t.valid) r << "not defined (too few groups or blocks, or all tied)";
     else if (t.p_value < 1e-4) r << "< 1e-4";
-    else r << num(t.p_value, 4);
+    else r << fixed(t.p_value, 4);
     r << " |\n";
   }
 
@@ -316,11 +302,11 @@ std::vector<std::string> write_report(const std::string& folder, const BatchInpu
   for (const MuAnalysis& m : a.mu) {
     const PaperReference* p = paper_at(m.mu);
     const BoxStats &pd = m.phase_final_delta, &pv = m.phase_final_delta_dot;
-    r << "| " << num(m.mu, 2) << " | " << (m.s1 ? num(m.s1->final_delta * U, 4) : "–") << " | "
-      << (p ? num(p->delta_T, 4) : "–") << " | " << num(pd.median * U, 4) << " [" << num(pd.min * U, 4) << ", "
-      << num(pd.max * U, 4) << "] | " << (m.s1 ? num(m.s1->final_delta_dot * U, 3) : "–") << " | "
-      << (p ? num(p->delta_dot_T, 3) : "–") << " | " << num(pv.median * U, 3) << " [" << num(pv.min * U, 3) << ", "
-      << num(pv.max * U, 3) << "] |\n";
+    r << "| " << fixed(m.mu, 2) << " | " << (m.s1 ? fixed(m.s1->final_delta * U, 4) : "–") << " | "
+      << (p ? fixed(p->delta_T, 4) : "–") << " | " << fixed(pd.median * U, 4) << " [" << fixed(pd.min * U, 4) << ", "
+      << fixed(pd.max * U, 4) << "] | " << (m.s1 ? fixed(m.s1->final_delta_dot * U, 3) : "–") << " | "
+      << (p ? fixed(p->delta_dot_T, 3) : "–") << " | " << fixed(pv.median * U, 3) << " [" << fixed(pv.min * U, 3) << ", "
+      << fixed(pv.max * U, 3) << "] |\n";
   }
 
   r << "\n## Table 4 analogue: probabilities of the safety intervals at T (%)\n\n"
@@ -331,9 +317,9 @@ std::vector<std::string> write_report(const std::string& folder, const BatchInpu
     << "] (%) | paper (%) | paper inside? |\n|---|---|---|---|---|---|---|\n";
   for (const MuAnalysis& m : a.mu) {
     const PaperReference* p = paper_table4 ? paper_at(m.mu) : nullptr;
-    r << "| " << num(m.mu, 2) << " | " << percent(m.delta_in_interval) << " | " << (p ? num(p->p_delta, 0) : "–")
+    r << "| " << fixed(m.mu, 2) << " | " << percent(m.delta_in_interval) << " | " << (p ? fixed(p->p_delta, 0) : "–")
       << " | " << (p ? inside(p->p_delta / 100, m.delta_in_interval) : "") << " | " << percent(m.delta_dot_in_interval)
-      << " | " << (p ? num(p->p_delta_dot, 0) : "–") << " | " << (p ? inside(p->p_delta_dot / 100, m.delta_dot_in_interval) : "")
+      << " | " << (p ? fixed(p->p_delta_dot, 0) : "–") << " | " << (p ? inside(p->p_delta_dot / 100, m.delta_dot_in_interval) : "")
       << " |\n";
   }
 
@@ -344,18 +330,18 @@ std::vector<std::string> write_report(const std::string& folder, const BatchInpu
        "| P(t_ss < T) [" << pct << "] (%) |\n|---|---|---|---|---|---|\n";
   for (const MuAnalysis& m : a.mu) {
     const BoxStats &ps = m.phase_steady_state_time, &st = m.steady_state_time;
-    r << "| " << num(m.mu, 2) << " | " << (m.s1 ? num(m.s1->steady_state_time, 4) : "–") << " | " << num(ps.median, 4)
-      << " [" << num(ps.min, 4) << ", " << num(ps.max, 4) << "] | "
-      << (st.n ? num(st.median, 4) + " [" + num(st.median_low, 4) + ", " + num(st.median_high, 4) + "]" : "–")
-      << " | " << num(st.q1, 4) << "–" << num(st.q3, 4) << " | " << percent(m.reached_steady_state) << " |\n";
+    r << "| " << fixed(m.mu, 2) << " | " << (m.s1 ? fixed(m.s1->steady_state_time, 4) : "–") << " | " << fixed(ps.median, 4)
+      << " [" << fixed(ps.min, 4) << ", " << fixed(ps.max, 4) << "] | "
+      << (st.n ? fixed(st.median, 4) + " [" + fixed(st.median_low, 4) + ", " + fixed(st.median_high, 4) + "]" : "–")
+      << " | " << fixed(st.q1, 4) << "–" << fixed(st.q3, 4) << " | " << percent(m.reached_steady_state) << " |\n";
   }
 
   r << "\n## PDFs at T and their joint evolution (Figs. 10–12)\n\n"
        "Density-normalised histograms, count/(R·width), with doc/model.md's edges; the fraction of the "
        "realizations outside the edges is not in any bin:\n\n| μ | δ(T) outside (%) | δ̇(T) outside (%) |\n|---|---|---|\n";
   for (const MuAnalysis& m : a.mu)
-    r << "| " << num(m.mu, 2) << " | " << num(100 * m.delta_pdf.fraction_outside(), 1) << " | "
-      << num(100 * m.delta_dot_pdf.fraction_outside(), 1) << " |\n";
+    r << "| " << fixed(m.mu, 2) << " | " << fixed(100 * m.delta_pdf.fraction_outside(), 1) << " | "
+      << fixed(100 * m.delta_dot_pdf.fraction_outside(), 1) << " |\n";
 
   r << sections;
 

@@ -8,37 +8,19 @@
 #include <map>
 #include <stdexcept>
 
+#include "gear_dynamics/analysis/report_text.hpp"
+
 namespace gear_dynamics {
 
 namespace fs = std::filesystem;
 
 namespace {
 
+using report_text::fixed;
+using report_text::general;
+using report_text::percent;
+
 constexpr double U = kToPaperUnits;
-
-std::string g(double x) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.10g", x);
-  return buf;
-}
-
-std::string fixed(double x, int decimals) {
-  if (std::isnan(x)) return "–";
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, x);
-  return buf;
-}
-
-std::string short_value(double x) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.6g", x);
-  return buf;
-}
-
-std::string percent(const Proportion& p) {
-  if (p.trials == 0) return "–";
-  return fixed(100 * p.estimate, 1) + " [" + fixed(100 * p.low, 1) + ", " + fixed(100 * p.high, 1) + "]";
-}
 
 std::string median_ci(const BoxStats& b, double scale, int decimals) {
   if (b.n == 0) return "–";
@@ -57,13 +39,13 @@ std::string fixed_text(const StudyAnalysis& s, const AxisSlice& l, const char* s
   std::string t;
   for (std::size_t a = 0; a < s.axes.size(); ++a) {
     if (a == l.axis || s.axes[a].values.size() < 2) continue;
-    t += (t.empty() ? "" : sep) + column_name(s.axes[a].key) + eq + short_value(l.fixed[a]);
+    t += (t.empty() ? "" : sep) + column_name(s.axes[a].key) + eq + general(l.fixed[a], 6);
   }
   return t;
 }
 
 void proportion_fields(std::ofstream& o, const Proportion& p) {
-  o << ',' << p.successes << ',' << p.trials << ',' << g(p.estimate) << ',' << g(p.low) << ',' << g(p.high);
+  o << ',' << p.successes << ',' << p.trials << ',' << general(p.estimate) << ',' << general(p.low) << ',' << general(p.high);
 }
 
 }  // namespace
@@ -160,7 +142,7 @@ BatchAnalysis analyse_batch(const BatchInputs& in, const AnalysisSettings& setti
   for (const PointAnalysis& p : study.points) {
     out.mu.push_back(p.stats);
     std::string k = std::to_string(p.point);
-    for (double v : p.values) k += "," + g(v);
+    for (double v : p.values) k += "," + general(v);
     out.keys.push_back(k);
     groups.emplace_back();
   }
@@ -206,17 +188,17 @@ void write_study_files(const std::string& folder, const BatchInputs& in, const S
       const MuAnalysis& m = p.stats;
       const BoxStats& d = m.center_distance;
       o << p.point;
-      for (double v : p.values) o << ',' << g(v);
-      o << ',' << d.n << ',' << g(d.min * U) << ',' << g(d.q1 * U) << ',' << g(d.median * U) << ',' << g(d.median_low * U)
-        << ',' << g(d.median_high * U) << ',' << g(d.q3 * U) << ',' << g(d.max * U) << ',' << m.phase_runs << ','
-        << g(m.phase_center_distance.median * U) << ',' << g(m.s1 ? m.s1->center_distance * U : std::nan(""));
+      for (double v : p.values) o << ',' << general(v);
+      o << ',' << d.n << ',' << general(d.min * U) << ',' << general(d.q1 * U) << ',' << general(d.median * U) << ',' << general(d.median_low * U)
+        << ',' << general(d.median_high * U) << ',' << general(d.q3 * U) << ',' << general(d.max * U) << ',' << m.phase_runs << ','
+        << general(m.phase_center_distance.median * U) << ',' << general(m.s1 ? m.s1->center_distance * U : std::nan(""));
       for (const Proportion* q : {&m.d_exceeds_phase_median, &m.d_exceeds_s1, &m.delta_in_interval,
                                   &m.delta_dot_in_interval, &p.both_in_interval, &m.reached_steady_state})
         proportion_fields(o, *q);
       const BoxStats& t = m.steady_state_time;
-      o << ',' << g(t.median) << ',' << g(t.median_low) << ',' << g(t.median_high) << ',' << g(t.q1) << ',' << g(t.q3)
-        << ',' << g(m.final_delta.median * U) << ',' << g(m.final_delta_dot.median * U) << ','
-        << g(p.final_phi_mean * U) << ',' << g(p.final_phi_sd * U) << '\n';
+      o << ',' << general(t.median) << ',' << general(t.median_low) << ',' << general(t.median_high) << ',' << general(t.q1) << ',' << general(t.q3)
+        << ',' << general(m.final_delta.median * U) << ',' << general(m.final_delta_dot.median * U) << ','
+        << general(p.final_phi_mean * U) << ',' << general(p.final_phi_sd * U) << '\n';
     }
     close(o, "points.csv");
   }
@@ -229,10 +211,10 @@ void write_study_files(const std::string& folder, const BatchInputs& in, const S
       for (std::size_t p : l.points) pts += (pts.empty() ? "" : ";") + std::to_string(p);
       const auto& k = l.kruskal_wallis;
       const auto& f = l.friedman;
-      o << column_name(st.axes[l.axis].key) << ',' << fixed_text(st, l, ";", "=") << ',' << pts << ',' << g(k.statistic)
-        << ',' << k.df << ',' << k.n << ',' << g(k.p_value) << ',' << g(f.statistic) << ',' << f.df << ',' << f.n << ','
-        << g(f.p_value) << ',' << g(st.points[l.points.front()].stats.center_distance.median * U) << ','
-        << g(st.points[l.points.back()].stats.center_distance.median * U) << '\n';
+      o << column_name(st.axes[l.axis].key) << ',' << fixed_text(st, l, ";", "=") << ',' << pts << ',' << general(k.statistic)
+        << ',' << k.df << ',' << k.n << ',' << general(k.p_value) << ',' << general(f.statistic) << ',' << f.df << ',' << f.n << ','
+        << general(f.p_value) << ',' << general(st.points[l.points.front()].stats.center_distance.median * U) << ','
+        << general(st.points[l.points.back()].stats.center_distance.median * U) << '\n';
     }
     close(o, "axis_tests.csv");
   }
@@ -255,7 +237,7 @@ void write_study_files(const std::string& folder, const BatchInputs& in, const S
        "(the same normals) at every point (common random numbers).\n\n| axis | values |\n|---|---|\n";
   for (const SweepAxis& a : st.axes) {
     r << "| `" << a.key << "` |";
-    for (std::size_t i = 0; i < a.values.size(); ++i) r << (i ? ", " : " ") << short_value(a.values[i]);
+    for (std::size_t i = 0; i < a.values.size(); ++i) r << (i ? ", " : " ") << general(a.values[i], 6);
     r << " |\n";
   }
   r << "\nUnits: d in mm·s^-1/2, t_ss in s. Medians with their exact " << pct
@@ -273,8 +255,8 @@ void write_study_files(const std::string& folder, const BatchInputs& in, const S
       const PointAnalysis &first = st.points[l.points.front()], &last = st.points[l.points.back()];
       r << "\n### `" << key << "`" << (others.empty() ? "" : " at " + others) << "\n\n";
       r << "Median d goes from " << median_ci(first.stats.center_distance, U, 3) << " at " << column_name(key) << " = "
-        << short_value(first.values[axis]) << " to " << median_ci(last.stats.center_distance, U, 3) << " at "
-        << short_value(last.values[axis]) << " mm·s^-1/2. Friedman's test blocked by realization (the design's common "
+        << general(first.values[axis], 6) << " to " << median_ci(last.stats.center_distance, U, 3) << " at "
+        << general(last.values[axis], 6) << " mm·s^-1/2. Friedman's test blocked by realization (the design's common "
         << "random numbers): χ² = " << (l.friedman.valid ? fixed(l.friedman.statistic, 2) : "–") << ", df = "
         << l.friedman.df << ", " << l.friedman.n << " realizations, p = " << p_text(l.friedman) << "; Kruskal–Wallis: H = "
         << (l.kruskal_wallis.valid ? fixed(l.kruskal_wallis.statistic, 2) : "–") << ", p = " << p_text(l.kruskal_wallis)
@@ -291,7 +273,7 @@ void write_study_files(const std::string& folder, const BatchInputs& in, const S
         const MuAnalysis& m = pa.stats;
         const BoxStats& d = m.center_distance;
         const BoxStats& t = m.steady_state_time;
-        r << "| " << short_value(pa.values[axis]) << " | " << d.n << " | " << median_ci(d, U, 3) << " | "
+        r << "| " << general(pa.values[axis], 6) << " | " << d.n << " | " << median_ci(d, U, 3) << " | "
           << fixed(d.q1 * U, 3) << "–" << fixed(d.q3 * U, 3) << " | " << fixed(m.phase_center_distance.median * U, 3)
           << " | " << percent(m.d_exceeds_phase_median) << " | " << percent(m.delta_in_interval) << " | "
           << percent(m.delta_dot_in_interval) << " | " << percent(pa.both_in_interval) << " | " << median_ci(t, 1, 4)

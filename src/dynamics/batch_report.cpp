@@ -8,6 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "gear_dynamics/analysis/report_text.hpp"
 #include "gear_dynamics/config/sweep.hpp"
 #include "gear_dynamics/dynamics/bifurcation.hpp"
 
@@ -17,27 +18,13 @@ namespace fs = std::filesystem;
 
 namespace {
 
+using report_text::fixed;
+using report_text::general;
+using report_text::percent;
+
 constexpr double U = kToPaperUnits;
 constexpr double kTimeMatch = 1e-9;  // [s] series times are n h, as the snapshot times
 constexpr std::size_t kKdePoints = 201;
-
-std::string g(double x, int digits = 10) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*g", digits, x);
-  return buf;
-}
-
-std::string fixed(double x, int decimals) {
-  if (std::isnan(x)) return "–";
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, x);
-  return buf;
-}
-
-std::string percent(const Proportion& p) {
-  if (p.trials == 0) return "–";
-  return fixed(100 * p.estimate, 1) + " [" + fixed(100 * p.low, 1) + ", " + fixed(100 * p.high, 1) + "]";
-}
 
 // The stochastic realizations of group i of the analysis: by mu in the mu sweep, by point in a study.
 std::vector<const RunRecord*> group_runs(const BatchInputs& in, const BatchAnalysis& a, std::size_t i) {
@@ -70,15 +57,15 @@ std::optional<GroupSpectrum> spectrum_of(const std::vector<const RunRecord*>& ru
   double fs = 0;
   for (const RunRecord* r : runs) fs = std::max(fs, sample_rate(*r));
   if (fs < kDenseRateOverMeshFrequency * s.mesh_frequency) {
-    why_not = "no realization has a series at >= " + g(kDenseRateOverMeshFrequency, 3) + " f_m = " +
-              g(kDenseRateOverMeshFrequency * s.mesh_frequency, 4) + " Hz (monte_carlo.record_rate, record_realizations)";
+    why_not = "no realization has a series at >= " + general(kDenseRateOverMeshFrequency, 3) + " f_m = " +
+              general(kDenseRateOverMeshFrequency * s.mesh_frequency, 4) + " Hz (monte_carlo.record_rate, record_realizations)";
     return std::nullopt;
   }
   const double left = c.run.duration - transient;
   const int periods = std::min(kSpectrumSegmentPeriods, static_cast<int>(std::floor(left * s.mesh_frequency + 1e-9)));
   if (periods < 1) {
-    why_not = "analysis.spectrum_transient = " + g(transient, 6) + " s leaves less than one mesh period of T = " +
-              g(c.run.duration, 6) + " s";
+    why_not = "analysis.spectrum_transient = " + general(transient, 6) + " s leaves less than one mesh period of T = " +
+              general(c.run.duration, 6) + " s";
     return std::nullopt;
   }
   const WelchOptions options{static_cast<std::size_t>(std::llround(periods * fs / s.mesh_frequency)), 0.5};
@@ -163,7 +150,7 @@ BatchOverTime analyse_over_time(const BatchInputs& in, const BatchAnalysis& a) {
   const AnalysisSettings& s = a.settings;
   BatchOverTime out;
   for (std::size_t i = 0; i < a.mu.size(); ++i) {
-    const std::string label = a.keys.empty() ? "mu = " + g(a.mu[i].mu, 6) : "point " + a.keys[i];
+    const std::string label = a.keys.empty() ? "mu = " + general(a.mu[i].mu, 6) : "point " + a.keys[i];
     const std::vector<const RunRecord*> all = group_runs(in, a, i);
     std::vector<const RunRecord*> runs;
     for (const RunRecord* r : all)
@@ -180,8 +167,8 @@ BatchOverTime analyse_over_time(const BatchInputs& in, const BatchAnalysis& a) {
         grp.passage = first_passage(series, s.delta_interval, s.delta_dot_interval, s.first_passage_settle - kTimeMatch);
         grp.survival = kaplan_meier(grp.passage->time, grp.passage->event, s.confidence);
       } else {
-        out.notes.push_back(label + ": analysis.first_passage_settle = " + g(s.first_passage_settle, 6) +
-                            " s is after the last recorded time " + g(series.time.back(), 6) + " s: no first passage");
+        out.notes.push_back(label + ": analysis.first_passage_settle = " + general(s.first_passage_settle, 6) +
+                            " s is after the last recorded time " + general(series.time.back(), 6) + " s: no first passage");
       }
       std::string why_not;
       grp.spectrum = spectrum_of(runs, group_config(in, a, i), s.spectrum_transient, why_not);
@@ -204,7 +191,7 @@ std::string write_over_time(const std::string& folder, const BatchInputs& in, co
   if (ec) throw std::runtime_error("cannot create report folder " + folder + ": " + ec.message());
   const AnalysisSettings& s = a.settings;
   const std::string kh = a.key_header.empty() ? "mu" : a.key_header;
-  const auto key = [&](std::size_t i) { return a.keys.empty() ? g(a.mu[i].mu) : a.keys[i]; };
+  const auto key = [&](std::size_t i) { return a.keys.empty() ? general(a.mu[i].mu) : a.keys[i]; };
   {
     CsvFile c(dir / "safety_over_time.csv", written,
               kh + ",t[s],quantity,successes,trials,estimate,wilson_low,wilson_high");
@@ -213,8 +200,8 @@ std::string write_over_time(const std::string& folder, const BatchInputs& in, co
       for (std::size_t j = 0; j < ss.time.size(); ++j)
         for (const auto& [name, p] : {std::pair<const char*, const Proportion&>{"joint", ss.joint[j]},
                                       {"delta", ss.delta_only[j]}, {"delta_dot", ss.velocity_only[j]}})
-          c.row(key(i)) << ',' << g(ss.time[j]) << ',' << name << ',' << p.successes << ',' << p.trials << ','
-                        << g(p.estimate) << ',' << g(p.low) << ',' << g(p.high) << '\n';
+          c.row(key(i)) << ',' << general(ss.time[j]) << ',' << name << ',' << p.successes << ',' << p.trials << ','
+                        << general(p.estimate) << ',' << general(p.low) << ',' << general(p.high) << '\n';
     }
   }
   {
@@ -224,14 +211,14 @@ std::string write_over_time(const std::string& folder, const BatchInputs& in, co
       const GroupOverTime& grp = o.groups[i];
       if (!grp.passage) continue;
       for (std::size_t r = 0; r < grp.realizations.size(); ++r)
-        fp.row(key(i)) << ',' << grp.realizations[r] << ',' << g(grp.passage->time[r]) << ','
+        fp.row(key(i)) << ',' << grp.realizations[r] << ',' << general(grp.passage->time[r]) << ','
                        << (grp.passage->event[r] ? 1 : 0) << '\n';
       // First row: the settling time, where every realization is at risk and S = 1.
-      km.row(key(i)) << ',' << g(s.first_passage_settle) << ',' << grp.passage->time.size() << ",0,1,1,1\n";
+      km.row(key(i)) << ',' << general(s.first_passage_settle) << ',' << grp.passage->time.size() << ",0,1,1,1\n";
       const KaplanMeier& k = grp.survival;
       for (std::size_t j = 0; j < k.time.size(); ++j)
-        km.row(key(i)) << ',' << g(k.time[j]) << ',' << k.at_risk[j] << ',' << k.events[j] << ',' << g(k.survival[j])
-                       << ',' << g(k.low[j]) << ',' << g(k.high[j]) << '\n';
+        km.row(key(i)) << ',' << general(k.time[j]) << ',' << k.at_risk[j] << ',' << k.events[j] << ',' << general(k.survival[j])
+                       << ',' << general(k.low[j]) << ',' << general(k.high[j]) << '\n';
     }
   }
   {
@@ -248,14 +235,14 @@ std::string write_over_time(const std::string& folder, const BatchInputs& in, co
       const GroupSpectrum& sp = *o.groups[i].spectrum;
       const PsdBand& b = sp.band;
       for (std::size_t k = 0; k < b.frequency.size(); ++k)
-        band.row(key(i)) << ',' << g(b.frequency[k]) << ',' << g(b.mean[k] * U2) << ',' << g(b.mean_low[k] * U2) << ','
-                         << g(b.mean_high[k] * U2) << ',' << g(b.run_low[k] * U2) << ',' << g(b.run_high[k] * U2) << '\n';
+        band.row(key(i)) << ',' << general(b.frequency[k]) << ',' << general(b.mean[k] * U2) << ',' << general(b.mean_low[k] * U2) << ','
+                         << general(b.mean_high[k] * U2) << ',' << general(b.run_low[k] * U2) << ',' << general(b.run_high[k] * U2) << '\n';
       for (const SpectralPeak& p : sp.peaks)
-        peaks.row(key(i)) << ',' << g(p.frequency) << ',' << g(p.density * U2) << ',' << p.harmonic << ','
-                          << g(p.offset) << ',' << (p.is_harmonic ? 1 : 0) << ',' << g(p.prominence) << '\n';
-      info.row(key(i)) << ',' << g(sp.mesh_frequency) << ',' << g(sp.first.sample_rate) << ',' << g(sp.first.resolution)
-                       << ',' << g(sp.first.enbw) << ',' << sp.first.segment << ',' << g(sp.first.overlap) << ','
-                       << sp.first.segments << ',' << b.runs << ',' << g(sp.transient) << '\n';
+        peaks.row(key(i)) << ',' << general(p.frequency) << ',' << general(p.density * U2) << ',' << p.harmonic << ','
+                          << general(p.offset) << ',' << (p.is_harmonic ? 1 : 0) << ',' << general(p.prominence) << '\n';
+      info.row(key(i)) << ',' << general(sp.mesh_frequency) << ',' << general(sp.first.sample_rate) << ',' << general(sp.first.resolution)
+                       << ',' << general(sp.first.enbw) << ',' << sp.first.segment << ',' << general(sp.first.overlap) << ','
+                       << sp.first.segments << ',' << b.runs << ',' << general(sp.transient) << '\n';
     }
   }
   if (s.kde) {
@@ -266,8 +253,8 @@ std::string write_over_time(const std::string& folder, const BatchInputs& in, co
                                             {"delta_dot_T", "mm/s", o.groups[i].kde_delta_dot}})
         if (kde)
           for (std::size_t k = 0; k < kde->grid.size(); ++k)
-            c.row(key(i)) << ',' << name << ',' << unit << ',' << g(kde->bandwidth * U) << ',' << g(kde->grid[k] * U)
-                          << ',' << g(kde->density[k] / U) << '\n';
+            c.row(key(i)) << ',' << name << ',' << unit << ',' << general(kde->bandwidth * U) << ',' << general(kde->grid[k] * U)
+                          << ',' << general(kde->density[k] / U) << '\n';
   }
 
   // ---- the report.md section ----
@@ -291,7 +278,7 @@ std::string write_over_time(const std::string& folder, const BatchInputs& in, co
        "realizations on the same times) give P(δ ∈ " << di << " ∧ δ̇ ∈ " << vi << ") and each interval alone at "
        "every recorded time, with " << pct << " Wilson intervals (safety_over_time.csv, all times). At t = T the "
        "two marginals are Table 4's probabilities (the same states).\n\n| " << head << " | n |";
-  for (double t : times) r << " P(both) at " << g(t, 6) << " s [" << pct << "] (%) |";
+  for (double t : times) r << " P(both) at " << general(t, 6) << " s [" << pct << "] (%) |";
   r << "\n|---|---|";
   for (std::size_t k = 0; k < times.size(); ++k) r << "---|";
   r << "\n";
@@ -308,7 +295,7 @@ std::string write_over_time(const std::string& folder, const BatchInputs& in, co
   r << "\n![Safety over time](safety_over_time.png)\n";
 
   r << "\n## First passage out of the safe set\n\n"
-       "Per realization, the first recorded time t ≥ " << g(s.first_passage_settle, 6) << " s "
+       "Per realization, the first recorded time t ≥ " << general(s.first_passage_settle, 6) << " s "
        "(`analysis.first_passage_settle`, after the start-up) at which (δ, δ̇) is outside the safe set above; a "
        "realization that stays inside is censored at the last recorded time. Excursions between two records are not "
        "seen, so this is the first passage of the recorded series (an upper bound of the true one). Kaplan–Meier "
@@ -327,7 +314,7 @@ std::string write_over_time(const std::string& folder, const BatchInputs& in, co
     std::string median = "> T";
     for (std::size_t j = 0; j < k.time.size(); ++j)
       if (k.survival[j] <= 0.5) {
-        median = g(k.time[j], 6);
+        median = general(k.time[j], 6);
         break;
       }
     const std::string st = k.time.empty() ? "1" : fixed(k.survival.back(), 3) + " [" + fixed(k.low.back(), 3) + ", " +
@@ -339,7 +326,7 @@ std::string write_over_time(const std::string& folder, const BatchInputs& in, co
 
   r << "\n## Spectrum of δ (doc/nonlinear-dynamics.md §2)\n\n"
        "Mean one-sided Welch PSD of δ over the realizations with a dense series (S2, S3, … at "
-       "`monte_carlo.record_rate`), after t = " << g(s.spectrum_transient, 6) << " s (`analysis.spectrum_transient`): "
+       "`monte_carlo.record_rate`), after t = " << general(s.spectrum_transient, 6) << " s (`analysis.spectrum_transient`): "
        "periodic Hann window, segments of " << kSpectrumSegmentPeriods << " mesh periods (fewer if the series is "
        "shorter) overlapping by 50 %, so every harmonic k·f_m is a bin centre. Band: the " << pct
     << " normal-approximation interval of the mean, and the pointwise range of the single runs (spectrum_band.csv). "
@@ -372,8 +359,8 @@ std::string write_over_time(const std::string& folder, const BatchInputs& in, co
          "| " << head << " | n | h for δ(T) [mm] | h for δ̇(T) [mm/s] |\n|---|---|---|---|\n";
     for (std::size_t i = 0; i < o.groups.size(); ++i)
       if (o.groups[i].kde_delta)
-        r << "| " << label(i) << " | " << a.mu[i].stochastic_runs << " | " << g(o.groups[i].kde_delta->bandwidth * U, 3)
-          << " | " << g(o.groups[i].kde_delta_dot->bandwidth * U, 3) << " |\n";
+        r << "| " << label(i) << " | " << a.mu[i].stochastic_runs << " | " << general(o.groups[i].kde_delta->bandwidth * U, 3)
+          << " | " << general(o.groups[i].kde_delta_dot->bandwidth * U, 3) << " |\n";
   }
   if (!o.notes.empty()) {
     r << "\nNot computed:\n\n";
