@@ -215,8 +215,12 @@ LiveSimulation::Outcome LiveSimulation::apply(const Request& r) {
   };
   const LaneSpec& lane = realization_.lane();
   Request q = r;
-  if (load_input_ == LoadInput::External && ((q.sigma && *q.sigma != 0.0) || (q.drift && *q.drift != 0.0))) {
-    log(LiveLogLevel::Warn, "sigma and lambda stay 0 with the external load (simulator.load_input: external)");
+  // Without a load SDE there is no noise to set: the deterministic load S1 and the external load.
+  const bool no_noise = settings_.deterministic || load_input_ == LoadInput::External;
+  if (no_noise && ((q.sigma && *q.sigma != 0.0) || (q.drift && *q.drift != 0.0))) {
+    log(LiveLogLevel::Warn, settings_.deterministic
+                                ? "sigma and lambda stay 0 with the deterministic load (simulator.deterministic: true)"
+                                : "sigma and lambda stay 0 with the external load (simulator.load_input: external)");
     q.sigma.reset();
     q.drift.reset();
   }

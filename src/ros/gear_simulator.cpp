@@ -198,23 +198,21 @@ void GearSimulator::reconfigure(SimulatorConfig& config, uint32_t /*level*/) {
     ROS_WARN("dynamic_reconfigure: %s = nan or out of range: refused, keeping %g", name.c_str(), dynamic_.*field);
     config.*field = dynamic_.*field;
   }
-  // The server answers with `config`: it must show what is in effect, so a refused value is undone here.
-  const bool no_noise = settings_.deterministic || settings_.load_input == "external";
-  if (no_noise && (config.sigma != 0.0 || config.lambda != 0.0)) {
-    ROS_WARN("sigma and lambda stay 0 with %s", settings_.deterministic
-                                                    ? "the deterministic load (simulator.deterministic: true)"
-                                                    : "the external load (simulator.load_input: external)");
-    config.sigma = 0.0;
-    config.lambda = 0.0;
-  }
   Request r;
   if (config.mu != dynamic_.mu) r.mu = config.mu;
   if (config.sigma != dynamic_.sigma) r.sigma = config.sigma;
   if (config.lambda != dynamic_.lambda) r.drift = config.lambda;
   if (config.real_time_factor != dynamic_.real_time_factor) r.real_time_factor = config.real_time_factor;
   if (config.publish_rate != dynamic_.publish_rate) r.publish_rate = config.publish_rate;
+  if (r.mu || r.sigma || r.drift || r.real_time_factor || r.publish_rate) {
+    sim_->request(r);  // returns once applied; a refused value (e.g. sigma without noise) is not
+    // The server answers with `config`: it shows what is in effect, as LiveSimulation decided.
+    const LiveSimulation::Status in_effect = sim_->status();
+    config.mu = in_effect.mu;
+    config.sigma = in_effect.sigma;
+    config.lambda = in_effect.drift;
+  }
   dynamic_ = config;
-  if (r.mu || r.sigma || r.drift || r.real_time_factor || r.publish_rate) sim_->request(r);
 }
 
 bool GearSimulator::pause(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {

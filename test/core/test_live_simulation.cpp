@@ -446,6 +446,21 @@ TEST(LiveSimulation, ExternalLoadHoldsTheCommandFromTheNextStep) {
   EXPECT_TRUE(sink.logged(gd::LiveLogLevel::Warn, "sigma and lambda stay 0 with the external load"));
 }
 
+TEST(LiveSimulation, DeterministicLoadRefusesNoise) {
+  const Loaded l = load("simulator: {real_time_factor: 0.0, t_end: 0.01, deterministic: true}");
+  RecordingSink sink;
+  gd::LiveSimulation sim(l.model, l.sim, sink);
+  Request r;
+  r.sigma = 3.0;
+  r.drift = 1.0;
+  sim.post(r);
+  sim.iterate();
+  EXPECT_EQ(sim.realization().lane().sigma, 0.0);
+  EXPECT_EQ(sim.realization().lane().drift, 0.0);
+  EXPECT_EQ(sim.status().sigma, 0.0);
+  EXPECT_TRUE(sink.logged(gd::LiveLogLevel::Warn, "sigma and lambda stay 0 with the deterministic load"));
+}
+
 TEST(LiveSimulation, ExternalPlusNoiseShiftsTheSdeByTheCommand) {
   const Loaded l = load("simulator: {real_time_factor: 0.0, t_end: 0.01, load_input: external_plus_noise}\n"
                         "load: {sigma: 5.0}");
