@@ -104,6 +104,25 @@ TEST(NormalStream, MomentsAndIndependence) {
   EXPECT_NEAR(moment(lead, lag), 0.0, 4.0 / std::sqrt(n));
 }
 
+// Normal 0 of each stream sets a realization's Phi(0), so its law across realizations (not along
+// one stream) decides the tails of Phi at every time. Counts beyond +-3 and +-3.5 over 2e6
+// streams are Poisson: within 5 of their standard deviations sqrt(expected).
+TEST(NormalStream, FirstNormalAcrossRealizationsHasNormalTails) {
+  const int n = 2000000;
+  const double thresholds[] = {3.0, 3.5};
+  for (double c : thresholds) {
+    long below = 0, above = 0;
+    for (int r = 0; r < n; ++r) {
+      const double z = gd::NormalStream(20180529, static_cast<std::uint64_t>(r)).at(0);
+      below += z < -c;
+      above += z > c;
+    }
+    const double expected = n * 0.5 * std::erfc(c / std::sqrt(2.0));
+    EXPECT_NEAR(below, expected, 5.0 * std::sqrt(expected)) << "z < -" << c;
+    EXPECT_NEAR(above, expected, 5.0 * std::sqrt(expected)) << "z > " << c;
+  }
+}
+
 TEST(Ensemble, SameSeedGivesBitIdenticalRuns) {
   const gd::GearPair g = gd::derive(gd::GearInputs{});
   gd::Ensemble a(g, 1e-6, {}, {stochastic(5, 0.04)}, 99);
