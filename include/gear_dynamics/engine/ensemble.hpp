@@ -71,6 +71,10 @@ class Ensemble {
   auto delta() const { return delta_.head(lanes()); }
   auto velocity() const { return velocity_.head(lanes()); }
   auto load() const { return load_.head(lanes()); }
+  // The same with the padding to whole packets (padding lanes stay at rest, 0): for passes in packets.
+  int padded_lanes() const { return static_cast<int>(delta_.size()); }
+  const Eigen::ArrayXd& padded_delta() const { return delta_; }
+  const Eigen::ArrayXd& padded_velocity() const { return velocity_; }
 
   // Run-time changes; they take effect at the next step boundary.
   void set_mu(int lane, double mu);
