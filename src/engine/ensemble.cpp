@@ -23,11 +23,24 @@ Ensemble::Ensemble(const GearPair& gear, double time_step, const InitialState& i
       seed_(seed) {
   if (spec_.empty()) throw std::invalid_argument("Ensemble: a block needs at least one lane");
   for (const LaneSpec& s : spec_) {
-    streams_.emplace_back(seed, s.realization);
     if (!s.stochastic && (s.sigma != 0.0 || s.load_sd != 0.0))
       throw std::invalid_argument("Ensemble: a lane without a random stream needs sigma = 0 and load_sd = 0");
   }
   const int p = padded(spec_.size());
+  for (int first = 0; first < p; first += kPacket) {
+    std::uint64_t realizations[kPacket] = {};
+    bool any = false;
+    for (int i = first; i < first + kPacket; ++i) {
+      const bool stochastic = i < static_cast<int>(spec_.size()) && spec_[i].stochastic;
+      if (stochastic) realizations[i - first] = spec_[i].realization;
+      any = any || stochastic;
+    }
+    if (!any) continue;  // its normals stay zero
+    streams_.emplace_back(seed, realizations);
+    stream_packet_.push_back(first / kPacket);
+    for (int i = first; i < first + kPacket; ++i)
+      if (!(i < static_cast<int>(spec_.size()) && spec_[i].stochastic)) silent_.push_back(i);
+  }
   delta_.setZero(p);
   velocity_.setZero(p);
   load_.setZero(p);
@@ -75,13 +88,11 @@ void Ensemble::set_state(int lane, double delta, double velocity) {
 }
 
 void Ensemble::refill_normals(std::uint64_t first_index) {
-  normals_first_ = first_index;
-  double row[kNormalChunk];
-  for (int i = 0; i < lanes(); ++i) {
-    if (!spec_[i].stochastic) continue;  // stays zero
-    streams_[i].fill(first_index, row, kNormalChunk);
-    normals_.row(i) = Eigen::Map<const Eigen::Array<double, 1, kNormalChunk>>(row);
-  }
+  normals_first_ = first_index;  // a multiple of kNormalChunk: one whole generator block
+  static_assert(kNormalChunk == 2 * NormalLanes::kBlockPairs);
+  for (std::size_t k = 0; k < streams_.size(); ++k)
+    streams_[k].block(first_index / 2, &normals_(stream_packet_[k] * kPacket, 0), normals_.rows());
+  for (int i : silent_) normals_.row(i).setZero();
 }
 
 void Ensemble::step() {
