@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <sstream>
+#include <type_traits>
 
 namespace gear_dynamics {
 
@@ -104,21 +105,28 @@ void Ensemble::step() {
   const double* z_col = &normals_(0, static_cast<Eigen::Index>(index - normals_first_));
   Packet sum = Packet::Zero();  // NaN and inf propagate through it: one finiteness test per step
 
-  for (Eigen::Index p = 0; p < delta_.size(); p += kPacket) {
-    Packet d = delta_.segment<kPacket>(p);
-    Packet v = velocity_.segment<kPacket>(p);
-    const Packet load0 = load_.segment<kPacket>(p);
-    const Packet mu = mu_.segment<kPacket>(p);
-    const Packet z = Eigen::Map<const Packet>(z_col + p);
+  // N lanes at a time: N = 2 kPacket runs two packets' dependency chains side by side in each
+  // statement (the kernel is latency-bound), the last odd packet on its own.
+  const auto step_lanes = [&](auto lanes, Eigen::Index p) GD_KERNEL_INLINE_LAMBDA {
+    constexpr int N = decltype(lanes)::value;
+    using Lanes = Eigen::Array<double, N, 1>;
+    Lanes d = delta_.segment<N>(p);
+    Lanes v = velocity_.segment<N>(p);
+    const Lanes load0 = load_.segment<N>(p);
+    const Lanes mu = mu_.segment<N>(p);
+    const Lanes z = Eigen::Map<const Lanes>(z_col + p);
     // The kernel shared with the one-lane path (Realization): the same operations per lane.
-    const Packet load1 = kernel::load_next<Packet>(load0, drift_.segment<kPacket>(p),
-                                                   sigma_.segment<kPacket>(p), z, h_, sqrt_h);
-    kernel::rk4_step<Packet>(plan, h_, b, alpha, q3, mu, load0, load1, d, v);
-    delta_.segment<kPacket>(p) = d;
-    velocity_.segment<kPacket>(p) = v;
-    load_.segment<kPacket>(p) = load1;
-    sum += d + v;
-  }
+    const Lanes load1 = kernel::load_next<Lanes>(load0, drift_.segment<N>(p), sigma_.segment<N>(p), z, h_, sqrt_h);
+    kernel::rk4_step<Lanes>(plan, h_, b, alpha, q3, mu, load0, load1, d, v);
+    delta_.segment<N>(p) = d;
+    velocity_.segment<N>(p) = v;
+    load_.segment<N>(p) = load1;
+    const Lanes dv = d + v;
+    for (int k = 0; k < N; k += kPacket) sum += dv.template segment<kPacket>(k);  // packet by packet, in order
+  };
+  Eigen::Index p = 0;
+  for (; p + 2 * kPacket <= delta_.size(); p += 2 * kPacket) step_lanes(std::integral_constant<int, 2 * kPacket>{}, p);
+  if (p < delta_.size()) step_lanes(std::integral_constant<int, kPacket>{}, p);
   ++n_;
   if (!std::isfinite(sum.sum())) report_divergence();
 }

@@ -199,21 +199,23 @@ void NormalLanes::block(std::uint64_t first_pair, double* out, std::ptrdiff_t st
     __m512i key0 = _mm512_cvtepu32_epi64(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(key0_)));
     __m512i key1 = _mm512_cvtepu32_epi64(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(key1_)));
     const __m512i w0_step = _mm512_set1_epi64(kPhiloxW0), w1_step = _mm512_set1_epi64(kPhiloxW1);
+    // Only the low 32 bits of each word are the state: vpmuludq reads nothing else, so the high
+    // halves may carry junk through the rounds and are cleared once at the end.
     for (int round = 0; round < 10; ++round) {
       for (int g = 0; g < kGroups; ++g) {
         const __m512i p0 = _mm512_mul_epu32(c0[g], m0);
         const __m512i p1 = _mm512_mul_epu32(c2[g], m1);
         c0[g] = _mm512_xor_si512(_mm512_xor_si512(_mm512_srli_epi64(p1, 32), c1[g]), key0);
-        c1[g] = _mm512_and_si512(p1, low);
+        c1[g] = p1;
         c2[g] = _mm512_xor_si512(_mm512_xor_si512(_mm512_srli_epi64(p0, 32), c3[g]), key1);
-        c3[g] = _mm512_and_si512(p0, low);
+        c3[g] = p0;
       }
       key0 = _mm512_add_epi32(key0, w0_step);  // the high halves stay 0
       key1 = _mm512_add_epi32(key1, w1_step);
     }
     for (int g = 0; g < kGroups; ++g) {
-      _mm512_store_si512(w0[g], _mm512_or_si512(_mm512_slli_epi64(c1[g], 32), c0[g]));
-      _mm512_store_si512(w1[g], _mm512_or_si512(_mm512_slli_epi64(c3[g], 32), c2[g]));
+      _mm512_store_si512(w0[g], _mm512_or_si512(_mm512_slli_epi64(c1[g], 32), _mm512_and_si512(c0[g], low)));
+      _mm512_store_si512(w1[g], _mm512_or_si512(_mm512_slli_epi64(c3[g], 32), _mm512_and_si512(c2[g], low)));
     }
 #else
     for (int g = 0; g < kGroups; ++g) {
