@@ -52,9 +52,9 @@ std::vector<RunResult> simulate(Ensemble& ensemble, const RunSettings& settings,
     const double* velocity = ensemble.padded_velocity().data();
     for (Eigen::Index p = 0; p < padded; p += Ensemble::kPacket) {  // every observer in one pass
       const Packet d = Eigen::Map<const Packet>(delta + p);
-      settle.observe(t, p, d);
-      settle_fine.observe(t, p, d);
-      if (ranged) range.observe(p, d, Packet(Eigen::Map<const Packet>(velocity + p)));
+      settle.observe_packet(t, p, d);
+      settle_fine.observe_packet(t, p, d);
+      if (ranged) range.observe_packet(p, d, Packet(Eigen::Map<const Packet>(velocity + p)));
     }
     if (snaps.due(n)) snaps.observe(n, ensemble.delta(), ensemble.velocity(), ensemble.load());
     if (recorder.every > 0 && n % recorder.every == 0)

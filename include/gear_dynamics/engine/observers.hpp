@@ -32,11 +32,12 @@ class WindowRange {
                        double max_minus_velocity);
   void reset();
   // Observing in packets of N lanes (simulate()'s one pass per step over a block padded to whole
-  // packets): start(n) once for grid step n, then observe(first, ...) for lanes first .. first + N - 1.
+  // packets): start(n) once for grid step n, then observe_packet(first, ...) for lanes first .. first + N - 1.
   // The same maxima as observe(n, delta, velocity).
   void start(std::int64_t n) { current_ = block_of(n).data(); }
   template <int N>
-  void observe(Eigen::Index first, const Eigen::Array<double, N, 1>& delta, const Eigen::Array<double, N, 1>& velocity) {
+  void observe_packet(Eigen::Index first, const Eigen::Array<double, N, 1>& delta,
+                      const Eigen::Array<double, N, 1>& velocity) {
     using Lanes = Eigen::Map<Eigen::Array<double, N, 1>>;
     const auto l = static_cast<Eigen::Index>(lanes_);
     Lanes max_delta(current_ + first), max_minus_delta(current_ + l + first);
@@ -76,7 +77,7 @@ class SteadyStateTime {
   void observe(double t, const Eigen::Ref<const Eigen::ArrayXd>& delta);
   // The same for lanes first .. first + N - 1 (a packet of simulate()'s one pass per step).
   template <int N>
-  void observe(double t, Eigen::Index first, const Eigen::Array<double, N, 1>& delta) {
+  void observe_packet(double t, Eigen::Index first, const Eigen::Array<double, N, 1>& delta) {
     double* last = last_.data() + first;
 #ifdef __AVX512F__
     if constexpr (N == 8) {  // GCC makes the loop below scalar stores, which stall the next load
