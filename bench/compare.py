@@ -63,7 +63,7 @@ def main():
     report(args, results, load, ratios)
 
 
-def rate(data):
+def steps_per_second(data):
     """Realization-steps per second of the best (shortest wall time) repetition."""
     return data["realizations"] * data["steps"] / data["seconds"].min()
 
@@ -71,7 +71,7 @@ def rate(data):
 def run_ratio(args, realizations, results, work):
     """(R, engine 2T, engine 1T, numpy) in realization-steps/s; the main table's runs when R matches."""
     if realizations == args.realizations:
-        return (realizations, rate(results[0][2]), rate(results[1][2]), rate(results[3][2]))
+        return (realizations, steps_per_second(results[0][2]), steps_per_second(results[1][2]), steps_per_second(results[3][2]))
     workload = ["--realizations", str(realizations), "--duration", str(args.duration),
                 "--check-duration", "0.001", "--check-every", "0.001"]
     out = os.path.join(work, f"ratio-{realizations}.json")
@@ -81,12 +81,12 @@ def run_ratio(args, realizations, results, work):
               flush=True)
         measure([args.gear_bench, "engine", "--block", str(args.block), "--threads", str(threads),
                  "--repeat", str(repeat), "--output", out] + workload, work)
-        rates.append(rate({k: np.atleast_1d(v) if k in ARRAYS else v for k, v in json.load(open(out)).items()}))
+        rates.append(steps_per_second({k: np.atleast_1d(v) if k in ARRAYS else v for k, v in json.load(open(out)).items()}))
     params = os.path.join(work, "params.json")
     repeat = 3 if realizations <= 512 else 1
     print(f"bench: numpy at R = {realizations}, {repeat} run(s) ...", file=sys.stderr, flush=True)
     measure([os.path.join(HERE, "gear_numpy.py"), params, out, "--repeat", str(repeat)] + workload, work)
-    rates.append(rate({k: np.atleast_1d(v) if k in ARRAYS else v for k, v in json.load(open(out)).items()}))
+    rates.append(steps_per_second({k: np.atleast_1d(v) if k in ARRAYS else v for k, v in json.load(open(out)).items()}))
     return (realizations, *rates)
 
 
@@ -137,7 +137,7 @@ def run_all(args, work):
 
 def report(args, results, load_before, ratios):
     reference = results[0][2]
-    rate_ref = rate(reference)
+    rate_ref = steps_per_second(reference)
     cpus = os.cpu_count()
     print(f"\nworkload: {args.realizations} realizations x {args.duration} s = "
           f"{args.realizations * reference['steps']:.3g} realization-steps of h = 1 us, mu and load "
