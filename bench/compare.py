@@ -49,12 +49,57 @@ def main():
     parser.add_argument("--block", type=int, default=32,
                         help="lanes per engine block: 64 realizations make one block per thread")
     parser.add_argument("--skip-octave", action="store_true")
+    parser.add_argument("--numpy-ratios", default="64,512,4096", metavar="R,R,...",
+                        help="also time the engine (1 and 2 threads) and numpy at these realization "
+                             "counts (same duration) and print the ratios; empty: none "
+                             "(default %(default)s)")
     args = parser.parse_args()
+    ratio_counts = [int(r) for r in args.numpy_ratios.split(",") if r.strip()]
 
     load = os.getloadavg()[0]
     with tempfile.TemporaryDirectory(prefix="gear_bench.") as work:
         results = run_all(args, work)
-    report(args, results, load)
+        ratios = [run_ratio(args, r, results, work) for r in ratio_counts]
+    report(args, results, load, ratios)
+
+
+def steps_per_second(data):
+    """Realization-steps per second of the best (shortest wall time) repetition."""
+    return data["realizations"] * data["steps"] / data["seconds"].min()
+
+
+def run_ratio(args, realizations, results, work):
+    """(R, engine 2T, engine 1T, numpy) in realization-steps/s; the main table's runs when R matches."""
+    if realizations == args.realizations:
+        return (realizations, steps_per_second(results[0][2]), steps_per_second(results[1][2]), steps_per_second(results[3][2]))
+    workload = ["--realizations", str(realizations), "--duration", str(args.duration),
+                "--check-duration", "0.001", "--check-every", "0.001"]
+    out = os.path.join(work, f"ratio-{realizations}.json")
+    rates = []
+    for threads, repeat in ((2, 10), (1, 5)):
+        print(f"bench: engine at R = {realizations}, {threads} thread(s), {repeat} run(s) ...", file=sys.stderr,
+              flush=True)
+        measure([args.gear_bench, "engine", "--block", str(args.block), "--threads", str(threads),
+                 "--repeat", str(repeat), "--output", out] + workload, work)
+        rates.append(steps_per_second({k: np.atleast_1d(v) if k in ARRAYS else v for k, v in json.load(open(out)).items()}))
+    params = os.path.join(work, "params.json")
+    repeat = 3 if realizations <= 512 else 1
+    print(f"bench: numpy at R = {realizations}, {repeat} run(s) ...", file=sys.stderr, flush=True)
+    measure([os.path.join(HERE, "gear_numpy.py"), params, out, "--repeat", str(repeat)] + workload, work)
+    rates.append(steps_per_second({k: np.atleast_1d(v) if k in ARRAYS else v for k, v in json.load(open(out)).items()}))
+    return (realizations, *rates)
+
+
+def print_ratios(ratios):
+    if not ratios:
+        return
+    print("\nthe engine against numpy by realization count (best wall time of each; numpy gains with R):\n")
+    print("| realizations | engine 2T [steps/s] | engine 1T [steps/s] | numpy [steps/s] | engine 2T / numpy "
+          "| engine 1T / numpy |")
+    print("|--------------|---------------------|---------------------|-----------------|-------------------"
+          "|-------------------|")
+    for r, two, one, numpy in ratios:
+        print(f"| {r:12d} | {two:19.3e} | {one:19.3e} | {numpy:15.3e} | {two / numpy:17.1f} | {one / numpy:17.1f} |")
 
 
 def run_all(args, work):
@@ -90,9 +135,9 @@ def run_all(args, work):
     return results
 
 
-def report(args, results, load_before):
+def report(args, results, load_before, ratios):
     reference = results[0][2]
-    rate_ref = reference["realizations"] * reference["steps"] / reference["seconds"].min()
+    rate_ref = steps_per_second(reference)
     cpus = os.cpu_count()
     print(f"\nworkload: {args.realizations} realizations x {args.duration} s = "
           f"{args.realizations * reference['steps']:.3g} realization-steps of h = 1 us, mu and load "
@@ -137,6 +182,7 @@ def report(args, results, load_before):
           f"{1e3 * reference['delta'].std(ddof=1):.5f} mm, delta_dot(T) = "
           f"{1e3 * reference['velocity'].mean():.3f} +- {1e3 * reference['velocity'].std(ddof=1):.3f}"
           f" mm/s (mean +- sd over realizations)")
+    print_ratios(ratios)
     sys.exit(0 if ok else 1)
 
 

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <sstream>
+#include <type_traits>
 
 namespace gear_dynamics {
 
@@ -23,11 +24,24 @@ Ensemble::Ensemble(const GearPair& gear, double time_step, const InitialState& i
       seed_(seed) {
   if (spec_.empty()) throw std::invalid_argument("Ensemble: a block needs at least one lane");
   for (const LaneSpec& s : spec_) {
-    streams_.emplace_back(seed, s.realization);
     if (!s.stochastic && (s.sigma != 0.0 || s.load_sd != 0.0))
       throw std::invalid_argument("Ensemble: a lane without a random stream needs sigma = 0 and load_sd = 0");
   }
   const int p = padded(spec_.size());
+  for (int first = 0; first < p; first += kPacket) {
+    std::uint64_t realizations[kPacket] = {};
+    bool any = false;
+    for (int i = first; i < first + kPacket; ++i) {
+      const bool stochastic = i < static_cast<int>(spec_.size()) && spec_[i].stochastic;
+      if (stochastic) realizations[i - first] = spec_[i].realization;
+      any = any || stochastic;
+    }
+    if (!any) continue;  // its normals stay zero
+    streams_.emplace_back(seed, realizations);
+    stream_packet_.push_back(first / kPacket);
+    for (int i = first; i < first + kPacket; ++i)
+      if (!(i < static_cast<int>(spec_.size()) && spec_[i].stochastic)) silent_.push_back(i);
+  }
   delta_.setZero(p);
   velocity_.setZero(p);
   load_.setZero(p);
@@ -75,13 +89,11 @@ void Ensemble::set_state(int lane, double delta, double velocity) {
 }
 
 void Ensemble::refill_normals(std::uint64_t first_index) {
-  normals_first_ = first_index;
-  double row[kNormalChunk];
-  for (int i = 0; i < lanes(); ++i) {
-    if (!spec_[i].stochastic) continue;  // stays zero
-    streams_[i].fill(first_index, row, kNormalChunk);
-    normals_.row(i) = Eigen::Map<const Eigen::Array<double, 1, kNormalChunk>>(row);
-  }
+  normals_first_ = first_index;  // a multiple of kNormalChunk: one whole generator block
+  static_assert(kNormalChunk == 2 * NormalLanes::kBlockPairs);
+  for (std::size_t k = 0; k < streams_.size(); ++k)
+    streams_[k].block(first_index / 2, &normals_(stream_packet_[k] * kPacket, 0), normals_.rows());
+  for (int i : silent_) normals_.row(i).setZero();
 }
 
 void Ensemble::step() {
@@ -93,21 +105,28 @@ void Ensemble::step() {
   const double* z_col = &normals_(0, static_cast<Eigen::Index>(index - normals_first_));
   Packet sum = Packet::Zero();  // NaN and inf propagate through it: one finiteness test per step
 
-  for (Eigen::Index p = 0; p < delta_.size(); p += kPacket) {
-    Packet d = delta_.segment<kPacket>(p);
-    Packet v = velocity_.segment<kPacket>(p);
-    const Packet load0 = load_.segment<kPacket>(p);
-    const Packet mu = mu_.segment<kPacket>(p);
-    const Packet z = Eigen::Map<const Packet>(z_col + p);
+  // N lanes at a time: N = 2 kPacket runs two packets' dependency chains side by side in each
+  // statement (the kernel is latency-bound), the last odd packet on its own.
+  const auto step_lanes = [&](auto lanes, Eigen::Index p) GD_KERNEL_INLINE_LAMBDA {
+    constexpr int N = decltype(lanes)::value;
+    using Lanes = Eigen::Array<double, N, 1>;
+    Lanes d = delta_.segment<N>(p);
+    Lanes v = velocity_.segment<N>(p);
+    const Lanes load0 = load_.segment<N>(p);
+    const Lanes mu = mu_.segment<N>(p);
+    const Lanes z = Eigen::Map<const Lanes>(z_col + p);
     // The kernel shared with the one-lane path (Realization): the same operations per lane.
-    const Packet load1 = kernel::load_next<Packet>(load0, drift_.segment<kPacket>(p),
-                                                   sigma_.segment<kPacket>(p), z, h_, sqrt_h);
-    kernel::rk4_step<Packet>(plan, h_, b, alpha, q3, mu, load0, load1, d, v);
-    delta_.segment<kPacket>(p) = d;
-    velocity_.segment<kPacket>(p) = v;
-    load_.segment<kPacket>(p) = load1;
-    sum += d + v;
-  }
+    const Lanes load1 = kernel::load_next<Lanes>(load0, drift_.segment<N>(p), sigma_.segment<N>(p), z, h_, sqrt_h);
+    kernel::rk4_step<Lanes>(plan, h_, b, alpha, q3, mu, load0, load1, d, v);
+    delta_.segment<N>(p) = d;
+    velocity_.segment<N>(p) = v;
+    load_.segment<N>(p) = load1;
+    const Lanes dv = d + v;
+    for (int k = 0; k < N; k += kPacket) sum += dv.template segment<kPacket>(k);  // packet by packet, in order
+  };
+  Eigen::Index p = 0;
+  for (; p + 2 * kPacket <= delta_.size(); p += 2 * kPacket) step_lanes(std::integral_constant<int, 2 * kPacket>{}, p);
+  if (p < delta_.size()) step_lanes(std::integral_constant<int, kPacket>{}, p);
   ++n_;
   if (!std::isfinite(sum.sum())) report_divergence();
 }

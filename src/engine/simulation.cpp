@@ -24,16 +24,18 @@ double grid_time(std::int64_t n, double time_step) {
 std::vector<RunResult> simulate(Ensemble& ensemble, const RunSettings& settings,
                                 const Recorder& recorder) {
   const int lanes = ensemble.lanes();
+  // The observers keep the padding lanes too, so that each step is one pass over whole packets.
+  const int padded = ensemble.padded_lanes();
   const std::int64_t total = settings.steps();
   const std::int64_t window = settings.steps_for(settings.window);
   // Blocks that make the window exact at T and at every recorded step.
   std::int64_t block = std::gcd(std::max<std::int64_t>(window, 1), total);
   if (recorder.every > 0) block = std::gcd(block, recorder.every);
-  WindowRange range(lanes, window, std::max<std::int64_t>(block, 1));
+  WindowRange range(padded, window, std::max<std::int64_t>(block, 1));
 
   const double b = ensemble.gear().in.backlash;
-  SteadyStateTime settle(lanes, b, settings.steady_state_tolerance * b);
-  SteadyStateTime settle_fine(lanes, b, settings.steady_state_tolerance_fine * b);
+  SteadyStateTime settle(padded, b, settings.steady_state_tolerance * b);
+  SteadyStateTime settle_fine(padded, b, settings.steady_state_tolerance_fine * b);
   std::vector<std::int64_t> snapshot_steps;
   for (double t : settings.snapshot_times) snapshot_steps.push_back(settings.steps_for(t));
   Snapshots snaps(lanes, snapshot_steps);
@@ -41,13 +43,22 @@ std::vector<RunResult> simulate(Ensemble& ensemble, const RunSettings& settings,
   // Only the windows that are ever read need the sliding observer: the last one, or all of them
   // when recording.
   const std::int64_t range_from = recorder.every > 0 ? 0 : total - window;
+  using Packet = Eigen::Array<double, Ensemble::kPacket, 1>;
   const auto observe = [&](std::int64_t n) {
     const double t = ensemble.time();
-    if (n >= range_from) range.observe(n, ensemble.delta(), ensemble.velocity());
-    settle.observe(t, ensemble.delta());
-    settle_fine.observe(t, ensemble.delta());
-    snaps.observe(n, ensemble.delta(), ensemble.velocity(), ensemble.load());
-    if (recorder.every > 0 && n % recorder.every == 0) recorder.record(ensemble, range.center_distance());
+    const bool ranged = n >= range_from;
+    if (ranged) range.start(n);
+    const double* delta = ensemble.padded_delta().data();
+    const double* velocity = ensemble.padded_velocity().data();
+    for (Eigen::Index p = 0; p < padded; p += Ensemble::kPacket) {  // every observer in one pass
+      const Packet d = Eigen::Map<const Packet>(delta + p);
+      settle.observe_packet(t, p, d);
+      settle_fine.observe_packet(t, p, d);
+      if (ranged) range.observe_packet(p, d, Packet(Eigen::Map<const Packet>(velocity + p)));
+    }
+    if (snaps.due(n)) snaps.observe(n, ensemble.delta(), ensemble.velocity(), ensemble.load());
+    if (recorder.every > 0 && n % recorder.every == 0)
+      recorder.record(ensemble, range.center_distance().head(lanes));
   };
 
   observe(ensemble.step_index());

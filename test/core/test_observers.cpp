@@ -198,3 +198,44 @@ TEST(WindowRange, FoldedExtremaAndOneLaneQueryMatchStepByStep) {
     }
   }
 }
+
+// simulate()'s pass in packets (observe_packet) keeps the same maxima and t_ss as the whole-array
+// observers, bit for bit, for 16 lanes in two packets of 8 (and one of 16), NaN included.
+TEST(WindowRange, PacketsMatchWholeArrays) {
+  constexpr int kLanes = 16;
+  using Packet = Eigen::Array<double, 8, 1>;
+  using Wide = Eigen::Array<double, kLanes, 1>;
+  gd::WindowRange whole(kLanes, 40, 8), packets(kLanes, 40, 8), wide(kLanes, 40, 8);
+  gd::SteadyStateTime settle_whole(kLanes, 0.5, 0.2), settle_packets(kLanes, 0.5, 0.2), settle_wide(kLanes, 0.5, 0.2);
+  for (std::int64_t n = 0; n < 300; ++n) {
+    Eigen::ArrayXd d(kLanes), v(kLanes);
+    for (int l = 0; l < kLanes; ++l) {
+      d[l] = sig_d(n, l);
+      v[l] = sig_v(n, l);
+    }
+    if (n == 123) d[3] = std::numeric_limits<double>::quiet_NaN();
+    const double t = 0.001 * static_cast<double>(n);
+    whole.observe(n, d, v);
+    settle_whole.observe(t, d);
+    packets.start(n);
+    for (int p = 0; p < kLanes; p += 8) {
+      packets.observe_packet(p, Packet(d.segment<8>(p)), Packet(v.segment<8>(p)));
+      settle_packets.observe_packet(t, p, Packet(d.segment<8>(p)));
+    }
+    wide.start(n);
+    wide.observe_packet(0, Wide(d), Wide(v));
+    settle_wide.observe_packet(t, 0, Wide(d));
+    if (n % 8 == 7) {
+      for (int l = 0; l < kLanes; ++l) {
+        for (const gd::WindowRange* other : {&packets, &wide}) {
+          const double a = whole.center_distance(l), b = other->center_distance(l);
+          EXPECT_EQ(std::memcmp(&a, &b, sizeof a), 0) << "step " << n << ", lane " << l;
+        }
+      }
+    }
+  }
+  for (int l = 0; l < kLanes; ++l) {
+    EXPECT_EQ(settle_whole.time()[l], settle_packets.time()[l]) << "lane " << l;
+    EXPECT_EQ(settle_whole.time()[l], settle_wide.time()[l]) << "lane " << l;
+  }
+}

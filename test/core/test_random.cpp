@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <vector>
 
 #include <Random123/philox.h>
 
@@ -49,6 +50,26 @@ TEST(NormalStream, PhiloxMatchesRandom123) {
           ASSERT_EQ(w0[i], (std::uint64_t{out[1]} << 32 | out[0])) << "counter " << p;
           ASSERT_EQ(w1[i], (std::uint64_t{out[3]} << 32 | out[2])) << "counter " << p;
         }
+      }
+    }
+  }
+}
+
+// Ensemble's lane-major generator: each lane is its own realization's stream bit for bit, whatever
+// the other lanes hold (high realization and seed bits included), at every block of counters.
+TEST(NormalLanes, EachLaneIsItsRealizationsStream) {
+  constexpr int kLanes = gd::NormalLanes::kLanes, kBlock = 2 * gd::NormalLanes::kBlockPairs;
+  for (const std::uint64_t seed : {20180529ull, 0x123456789ABCDEFull}) {
+    const std::uint64_t realizations[kLanes] = {0, 7, 3, (1ull << 33) + 5, 99, 1, 1000000, 2};
+    const gd::NormalLanes lanes(seed, realizations);
+    for (const std::uint64_t first_pair : {0ull, 32ull, (1ull << 32) - 32}) {
+      double out[kBlock * kLanes];
+      lanes.block(first_pair, out, kLanes);
+      for (int l = 0; l < kLanes; ++l) {
+        std::vector<double> expected(kBlock);
+        gd::NormalStream(seed, realizations[l]).fill(2 * first_pair, expected.data(), kBlock);
+        for (int k = 0; k < kBlock; ++k)
+          ASSERT_TRUE(bit_equal(out[k * kLanes + l], expected[k])) << "lane " << l << ", normal " << k;
       }
     }
   }

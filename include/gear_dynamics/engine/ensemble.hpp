@@ -71,6 +71,10 @@ class Ensemble {
   auto delta() const { return delta_.head(lanes()); }
   auto velocity() const { return velocity_.head(lanes()); }
   auto load() const { return load_.head(lanes()); }
+  // The same with the padding to whole packets (padding lanes stay at rest, 0): for passes in packets.
+  int padded_lanes() const { return static_cast<int>(delta_.size()); }
+  const Eigen::ArrayXd& padded_delta() const { return delta_; }
+  const Eigen::ArrayXd& padded_velocity() const { return velocity_; }
 
   // Run-time changes; they take effect at the next step boundary.
   void set_mu(int lane, double mu);
@@ -91,13 +95,18 @@ class Ensemble {
   double h_;
   InitialState initial_;
   std::vector<LaneSpec> spec_;
-  std::vector<NormalStream> streams_;
+  // One generator per packet of kPacket lanes (NormalLanes: each lane its own stream); packets
+  // without a stochastic lane have none. Lanes without a stream get zeros (silent_).
+  std::vector<NormalLanes> streams_;
+  std::vector<int> stream_packet_;  // packet of streams_[k]
+  std::vector<int> silent_;         // lanes of those packets without a stream (padding included)
   std::uint64_t seed_;
   std::int64_t n_ = 0;
 
   // Padded to a multiple of kPacket.
   Eigen::ArrayXd delta_, velocity_, load_, mu_, sigma_, drift_;
   // Padded lanes x kNormalChunk: column j holds normal normals_first_ + j of each lane's stream.
+  static_assert(Ensemble::kPacket == NormalLanes::kLanes);
   // Chunks start at multiples of kNormalChunk, whole blocks of the stream's generator.
   Eigen::ArrayXXd normals_;
   std::uint64_t normals_first_ = 0;

@@ -28,8 +28,28 @@ class NormalStream {
  private:
   // Normals 2 first_pair ... 2 (first_pair + kBlockPairs) - 1 into out.
   void block(std::uint64_t first_pair, double* out) const;
+  friend class NormalLanes;
   std::uint32_t key_[2];
   std::uint32_t seed_high_;
+};
+
+// The streams of kLanes realizations side by side, one per SIMD lane, all lanes at the same counter
+// (keys as vectors): lane l gives NormalStream(seed, realization[l])'s normals bit for bit (the same
+// Philox counters and keys, the same Box-Muller operations lane by lane), whatever the other lanes
+// hold. Ensemble draws its normals this way, straight into its lane-major chunk.
+class NormalLanes {
+ public:
+  static constexpr int kLanes = 8;
+  static constexpr int kBlockPairs = NormalStream::kBlockPairs;
+
+  NormalLanes(std::uint64_t seed, const std::uint64_t (&realizations)[kLanes]);
+
+  // Normals 2 first_pair ... 2 (first_pair + kBlockPairs) - 1 of every lane: normal 2 first_pair + k
+  // of lane l goes to out[k * stride + l].
+  void block(std::uint64_t first_pair, double* out, std::ptrdiff_t stride) const;
+
+ private:
+  std::uint32_t key0_[kLanes], key1_[kLanes], seed_high_[kLanes];
 };
 
 }  // namespace gear_dynamics

@@ -3,6 +3,8 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <immintrin.h>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -29,6 +31,22 @@ class WindowRange {
   void observe_extrema(std::int64_t n, double max_delta, double max_minus_delta, double max_velocity,
                        double max_minus_velocity);
   void reset();
+  // Observing in packets of N lanes (simulate()'s one pass per step over a block padded to whole
+  // packets): start(n) once for grid step n, then observe_packet(first, ...) for lanes first .. first + N - 1.
+  // The same maxima as observe(n, delta, velocity).
+  void start(std::int64_t n) { current_ = block_of(n).data(); }
+  template <int N>
+  void observe_packet(Eigen::Index first, const Eigen::Array<double, N, 1>& delta,
+                      const Eigen::Array<double, N, 1>& velocity) {
+    using Lanes = Eigen::Map<Eigen::Array<double, N, 1>>;
+    const auto l = static_cast<Eigen::Index>(lanes_);
+    Lanes max_delta(current_ + first), max_minus_delta(current_ + l + first);
+    Lanes max_velocity(current_ + 2 * l + first), max_minus_velocity(current_ + 3 * l + first);
+    max_delta = max_delta.max(delta);
+    max_minus_delta = max_minus_delta.max(-delta);
+    max_velocity = max_velocity.max(velocity);
+    max_minus_velocity = max_minus_velocity.max(-velocity);
+  }
 
   Eigen::ArrayXd delta_range() const;
   Eigen::ArrayXd velocity_range() const;
@@ -49,6 +67,7 @@ class WindowRange {
   Eigen::ArrayXXd blocks_;  // column i: block segment_index_ * segment_ + i (-inf = no sample)
   Eigen::ArrayXXd suffix_;  // column i: blocks i..segment_-1 of the previous segment
   Eigen::ArrayXd prefix_;   // blocks of the current segment before block_index_
+  double* current_ = nullptr;  // start(n)'s column
 };
 
 // t_ss: the last grid time at which |delta - b| > tolerance, 0 if none (doc/model.md §8).
@@ -56,6 +75,20 @@ class SteadyStateTime {
  public:
   SteadyStateTime(int lanes, double backlash, double tolerance);
   void observe(double t, const Eigen::Ref<const Eigen::ArrayXd>& delta);
+  // The same for lanes first .. first + N - 1 (a packet of simulate()'s one pass per step).
+  template <int N>
+  void observe_packet(double t, Eigen::Index first, const Eigen::Array<double, N, 1>& delta) {
+    double* last = last_.data() + first;
+#ifdef __AVX512F__
+    if constexpr (N == 8) {  // GCC makes the loop below scalar stores, which stall the next load
+      const __m512d off = _mm512_abs_pd(_mm512_sub_pd(_mm512_loadu_pd(delta.data()), _mm512_set1_pd(backlash_)));
+      const __mmask8 far = _mm512_cmp_pd_mask(off, _mm512_set1_pd(tolerance_), _CMP_GT_OQ);  // as >: false on NaN
+      _mm512_storeu_pd(last, _mm512_mask_blend_pd(far, _mm512_loadu_pd(last), _mm512_set1_pd(t)));
+      return;
+    }
+#endif
+    for (int i = 0; i < N; ++i) last[i] = std::fabs(delta[i] - backlash_) > tolerance_ ? t : last[i];
+  }
   void reset() { last_.setZero(); }
   const Eigen::ArrayXd& time() const { return last_; }
 
@@ -72,6 +105,7 @@ class Snapshots {
                const Eigen::Ref<const Eigen::ArrayXd>& velocity,
                const Eigen::Ref<const Eigen::ArrayXd>& load);
   void reset() { next_ = 0; }
+  bool due(std::int64_t n) const { return next_ < steps_.size() && steps_[next_] == n; }
 
   const std::vector<std::int64_t>& steps() const { return steps_; }
   // Column k holds the lanes' values at steps()[k].

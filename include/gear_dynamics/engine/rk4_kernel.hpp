@@ -15,6 +15,7 @@
 // The kernel is inlined into each stepping loop (GCC otherwise calls the packet version once per
 // packet, with d and v through memory: 4 % slower).
 #define GD_KERNEL_INLINE inline __attribute__((always_inline))
+#define GD_KERNEL_INLINE_LAMBDA __attribute__((always_inline))
 
 namespace gear_dynamics::kernel {
 
