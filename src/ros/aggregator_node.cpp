@@ -2,6 +2,7 @@
 
 #include <ros/master.h>
 #include <spawn.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 
 #include <algorithm>
@@ -47,7 +48,10 @@ bool AggregatorNode::run() {
     ROS_FATAL("gear_aggregator: %s", ex.what());
     return false;
   }
-  ROS_INFO("gear_aggregator: report written to %s/report.md", report_folder_.c_str());
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);  // this process only: the bag readers are children
+  ROS_INFO("gear_aggregator: report written to %s/report.md (peak RSS %.0f MB)", report_folder_.c_str(),
+           static_cast<double>(usage.ru_maxrss) / 1024.0);
   return true;
 }
 

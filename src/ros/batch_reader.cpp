@@ -431,13 +431,14 @@ class ParametersCache {
   std::map<std::string, ParsedParameters> parsed_;
 };
 
-// The run record of bag `read` of run `e`, if it is that run of this batch; else throws Skip.
-RunRecord check_run(const BagRead& read, const ManifestRun& e, const Manifest& manifest, ParametersCache& parameters) {
+// The run record of bag `read` of run `e`, if it is that run of this batch (its series moved out of
+// `read`); else throws Skip.
+RunRecord check_run(BagRead& read, const ManifestRun& e, const Manifest& manifest, ParametersCache& parameters) {
   const auto require = [](bool ok, const std::string& why) {
     if (!ok) throw Skip(why);
   };
   if (!read.contents) throw Skip(read.error);
-  const BagContents& bag = *read.contents;
+  BagContents& bag = *read.contents;
   const int infos = static_cast<int>(bag.infos), summaries = static_cast<int>(bag.summaries);
   require(infos == 1, "has " + std::to_string(infos) + " " + kRunInfoTopic + " messages, expected 1");
   require(summaries == 1, summaries == 0 ? std::string("has no ") + kSummaryTopic + " (the run did not finish)"
@@ -491,9 +492,9 @@ RunRecord check_run(const BagRead& read, const ManifestRun& e, const Manifest& m
   r.snapshot_times = summary->snapshot_times;
   r.snapshot_delta = summary->snapshot_delta;
   r.snapshot_delta_dot = summary->snapshot_delta_dot;
-  r.series_times = bag.t;
-  r.series_delta = bag.delta;
-  r.series_delta_dot = bag.delta_dot;
+  r.series_times = std::move(bag.t);
+  r.series_delta = std::move(bag.delta);
+  r.series_delta_dot = std::move(bag.delta_dot);
   return r;
 }
 
@@ -631,13 +632,14 @@ BatchInputs read_batches(const std::vector<std::string>& folder_args, const Read
       }
     }
     if (jobs.empty()) break;
-    const std::vector<BagRead> reads = read_bags_isolated(jobs);
+    std::vector<BagRead> reads = read_bags_isolated(jobs);
     for (std::size_t i = 0; i < reads.size(); ++i) {
       Candidate& c = *round[i].first;
       c.tried = true;
       try {
         c.record = check_run(reads[i], round[i].second->first, *round[i].second->second, parameters);
-        c.rows = reads[i].contents->series;
+        c.rows = std::move(reads[i].contents->series);
+        reads[i].contents.reset();
       } catch (const Skip& ex) {
         c.reason = ex.what();
       }
@@ -646,12 +648,12 @@ BatchInputs read_batches(const std::vector<std::string>& folder_args, const Read
   std::map<fs::path, std::size_t> usable;  // runs each folder provides
   for (const auto& [name, entry] : listed) {
     std::string used;
-    for (const Candidate& c : candidates[name]) {
+    for (Candidate& c : candidates[name]) {
       if (!used.empty()) {  // the folder still contributes this run
         skip(c.file, "duplicate of " + used + " (not read)");
         ++usable[c.folder];
       } else if (c.record) {
-        in.runs.push_back(*c.record);
+        in.runs.push_back(std::move(*c.record));
         used = c.file.string();
         ++usable[c.folder];
         series << c.rows;
