@@ -81,7 +81,7 @@ BagWriter::~BagWriter() {
 
 void BagWriter::fail(const std::string& what) {
   const int error = errno;
-  throw std::runtime_error(path_ + ": " + what + (error ? std::string(": ") + std::strerror(error) : std::string()));
+  throw BagWriteError(path_ + ": " + what + (error ? std::string(": ") + std::strerror(error) : std::string()));
 }
 
 void BagWriter::put(const void* data, std::size_t size) {
@@ -122,7 +122,7 @@ void BagWriter::write_file_header(std::uint64_t index_position) {
 
 std::uint8_t* BagWriter::begin_message(const std::string& topic, const ros::Time& time, const char* type,
                                        const char* md5, const char* definition, std::uint32_t size) {
-  if (time < ros::TIME_MIN) throw std::runtime_error(path_ + ": a message time before ros::TIME_MIN");
+  if (time < ros::TIME_MIN) throw BagWriteError(path_ + ": a message time before ros::TIME_MIN");
   auto found = connections_.find(topic);
   const bool new_connection = found == connections_.end();
   if (new_connection) {

@@ -311,7 +311,8 @@ void BagSink::write(Item& item) {
     if (b == open_.end()) throw;
     const std::string file = active_path(folder_, b->second.name).string();
     open_.erase(b);  // closes the file unfinished: it stays .active
-    throw std::runtime_error("cannot write " + file + ": " + e.what());
+    // BagWriter's errors name the file already.
+    throw std::runtime_error("cannot write " + (dynamic_cast<const BagWriteError*>(&e) ? "" : file + ": ") + e.what());
   }
 }
 

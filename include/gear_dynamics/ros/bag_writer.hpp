@@ -14,10 +14,17 @@
 #include <cstdint>
 #include <cstdio>
 #include <map>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 namespace gear_dynamics {
+
+// A bag could not be written: "<file>: <what> [: <errno text>]".
+class BagWriteError : public std::runtime_error {
+ public:
+  explicit BagWriteError(const std::string& what) : std::runtime_error(what) {}
+};
 
 class BagWriter {
  public:
@@ -27,7 +34,7 @@ class BagWriter {
   ~BagWriter();  // closes the file without finishing the bag (call close() to finish it)
 
   // Creates (truncates) `path` and writes the version line and a provisional file header.
-  // Throws std::runtime_error naming the file.
+  // Throws BagWriteError.
   void open(const std::string& path);
   bool is_open() const { return file_ != nullptr; }
 
@@ -43,7 +50,7 @@ class BagWriter {
   }
 
   // Writes the last chunk, the index (connection and chunk info records) and the final file header,
-  // then closes the file. Throws std::runtime_error naming the file.
+  // then closes the file. Throws BagWriteError.
   void close();
 
  private:
