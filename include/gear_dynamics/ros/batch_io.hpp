@@ -22,10 +22,6 @@
 #include "gear_dynamics/ros/bag_writer.hpp"
 #include "gear_dynamics/ros/conversions.hpp"
 
-namespace rosbag {
-class Bag;
-}
-
 namespace gear_dynamics {
 
 // The manifest's `config`: the model (to_yaml) plus the `monte_carlo` settings that define the
