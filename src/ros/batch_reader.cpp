@@ -4,6 +4,7 @@
 #include <ros/console.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -693,6 +694,20 @@ bool batch_complete(const std::string& folder) {
   } catch (const std::exception&) {
     return false;
   }
+}
+
+std::string manifests_signature(const std::string& folder) {
+  std::ostringstream out;
+  try {
+    for (const fs::path& p : manifests_in(folder)) {
+      struct stat st {};
+      if (::stat(p.c_str(), &st) != 0) continue;
+      out << p.filename().string() << ' ' << st.st_ino << ' ' << st.st_size << ' ' << st.st_mtim.tv_sec << '.'
+          << st.st_mtim.tv_nsec << '\n';
+    }
+  } catch (const std::exception&) {  // the folder is not there (yet)
+  }
+  return out.str();
 }
 
 }  // namespace gear_dynamics
