@@ -17,6 +17,7 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -284,6 +285,30 @@ struct BagRead {
   std::string error;
 };
 
+// The child of read_bags_in_child: reads jobs[first...] and sends a frame per bag into the pipe,
+// then _exit (no destructors, no atexit).
+[[noreturn]] void read_bags_into_pipe(const std::vector<BagJob>& jobs, std::size_t first, const int fds[2]) {
+  ::close(fds[0]);
+  auto bag = std::make_unique<rosbag::Bag>();
+  for (std::size_t i = first; i < jobs.size(); ++i) {
+    std::uint8_t status = 0;
+    std::vector<std::uint8_t> payload;
+    try {
+      payload = serialize(read_bag(*bag, jobs[i].file, jobs[i].series_of, jobs[i].states));
+    } catch (const std::exception& ex) {
+      bag = std::make_unique<rosbag::Bag>();
+      status = dynamic_cast<const Skip*>(&ex) ? 1 : 2;
+      const std::string what = ex.what();
+      payload.assign(what.begin(), what.end());
+    }
+    const auto index = static_cast<std::uint32_t>(i), size = static_cast<std::uint32_t>(payload.size());
+    if (!write_all(fds[1], &index, 4) || !write_all(fds[1], &status, 1) || !write_all(fds[1], &size, 4) ||
+        !write_all(fds[1], payload.data(), payload.size()))
+      ::_exit(3);
+  }
+  ::_exit(0);
+}
+
 // Reads the bags in order in a child process. rosbag trusts a bag's index: a damaged offset makes
 // it read out of bounds and crash (one flipped byte in an index record is enough). In a child that
 // costs the bag, not the aggregator: a new child goes on with the next bag. One child reads many
@@ -297,35 +322,23 @@ std::vector<BagRead> read_bags_in_child(const std::vector<BagJob>& jobs) {
   std::size_t first = 0;
   while (first < jobs.size()) {
     int fds[2];
-    if (::pipe2(fds, O_CLOEXEC) != 0) throw BatchReadError(std::string("cannot read bags: pipe: ") + std::strerror(errno));
-    const pid_t pid = ::fork();
+    pid_t pid;
+    {
+      // Another reader thread forking between this pipe's creation and the close of its write
+      // end below would give its child a copy of that end, and this pipe's end of file would then
+      // wait for that child as well.
+      static std::mutex forking;
+      std::lock_guard<std::mutex> lock(forking);
+      if (::pipe2(fds, O_CLOEXEC) != 0)
+        throw BatchReadError(std::string("cannot read bags: pipe: ") + std::strerror(errno));
+      pid = ::fork();
+      if (pid == 0) read_bags_into_pipe(jobs, first, fds);  // the child; does not return
+      ::close(fds[1]);
+    }
     if (pid < 0) {
       ::close(fds[0]);
-      ::close(fds[1]);
       throw BatchReadError(std::string("cannot read bags: fork: ") + std::strerror(errno));
     }
-    if (pid == 0) {  // the child: reading and the pipe only, then _exit (no destructors, no atexit)
-      ::close(fds[0]);
-      auto bag = std::make_unique<rosbag::Bag>();
-      for (std::size_t i = first; i < jobs.size(); ++i) {
-        std::uint8_t status = 0;
-        std::vector<std::uint8_t> payload;
-        try {
-          payload = serialize(read_bag(*bag, jobs[i].file, jobs[i].series_of, jobs[i].states));
-        } catch (const std::exception& ex) {
-          bag = std::make_unique<rosbag::Bag>();
-          status = dynamic_cast<const Skip*>(&ex) ? 1 : 2;
-          const std::string what = ex.what();
-          payload.assign(what.begin(), what.end());
-        }
-        const auto index = static_cast<std::uint32_t>(i), size = static_cast<std::uint32_t>(payload.size());
-        if (!write_all(fds[1], &index, 4) || !write_all(fds[1], &status, 1) || !write_all(fds[1], &size, 4) ||
-            !write_all(fds[1], payload.data(), payload.size()))
-          ::_exit(3);
-      }
-      ::_exit(0);
-    }
-    ::close(fds[1]);
     std::vector<std::uint8_t> data;  // data[at...] is not yet taken
     std::size_t at = 0;
     const auto take_frames = [&] {  // whole frames (a crash may cut the last one)
