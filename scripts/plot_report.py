@@ -368,18 +368,56 @@ def main():
     points = os.path.join(args.folder, "points.csv")
     study = os.path.exists(points) and len(axis_columns(read(args.folder, "points.csv"))) > 1
     if study:  # a study with more axes than mu: its figures, not the paper's
-        study_figures(args.folder, out)
-        over_time_figures(args.folder, out)
+        draw_in_parallel([lambda: study_figures(args.folder, out), lambda: safety_figure(args.folder, out),
+                          lambda: first_passage_figure(args.folder, out), lambda: spectrum_figure(args.folder, out)])
         print("plot_report: study figures written to %s" % args.folder)
         return
-    series_figures(args.folder, args.mu, out)
-    center_distance_figures(args.folder, out)
-    joint_figure(args.folder, args.mu, out)
-    pdf_figure(args.folder, "pdf_delta.csv", "mm", "δ(T)", "PDF of δ at T (Fig. 11)", "fig11_pdf_delta.png", out)
-    pdf_figure(args.folder, "pdf_delta_dot.csv", "mm/s", r"$\dot{\delta}$(T)", r"PDF of $\dot{\delta}$ at T (Fig. 12)",
-               "fig12_pdf_delta_dot.png", out)
-    over_time_figures(args.folder, out)
+    # Dearest first (the series and the spectrum band read the largest CSV files), so that dealing
+    # them out round-robin gives the processes like shares.
+    draw_in_parallel([
+        lambda: series_figures(args.folder, args.mu, out),
+        lambda: spectrum_figure(args.folder, out),
+        lambda: joint_figure(args.folder, args.mu, out),
+        lambda: pdf_figure(args.folder, "pdf_delta.csv", "mm", "δ(T)", "PDF of δ at T (Fig. 11)", "fig11_pdf_delta.png",
+                           out),
+        lambda: pdf_figure(args.folder, "pdf_delta_dot.csv", "mm/s", r"$\dot{\delta}$(T)",
+                           r"PDF of $\dot{\delta}$ at T (Fig. 12)", "fig12_pdf_delta_dot.png", out),
+        lambda: safety_figure(args.folder, out),
+        lambda: center_distance_figures(args.folder, out),
+        lambda: first_passage_figure(args.folder, out),
+    ])
     print("plot_report: figures written to %s" % args.folder)
+
+
+def draw_in_parallel(tasks):
+    """Runs the figure functions in one forked process per core (task i in process i mod n); each
+    figure is drawn whole by one process, so the files are those of a serial run. Exits with
+    status 1 if any process failed."""
+    n = max(1, min(len(os.sched_getaffinity(0)), len(tasks)))
+    children = []
+    for k in range(1, n):
+        pid = os.fork()
+        if pid == 0:
+            status = 0
+            try:
+                for task in tasks[k::n]:
+                    task()
+            except BaseException:  # noqa: B902 -- report it, then end the child without cleanup
+                import traceback
+                traceback.print_exc()
+                status = 1
+            sys.stderr.flush()
+            os._exit(status)
+        children.append(pid)
+    failed = False
+    try:
+        for task in tasks[0::n]:
+            task()
+    finally:
+        for pid in children:
+            failed = os.waitpid(pid, 0)[1] != 0 or failed
+    if failed:
+        sys.exit(1)
 
 
 if __name__ == "__main__":

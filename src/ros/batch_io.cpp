@@ -29,16 +29,6 @@ bool ends_with(const std::string& s, const std::string& tail) {
   return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
 }
 
-// rosbag cannot release a bag whose write failed (e.g. on a full disk): ~Bag closes it again, the
-// close throws again (its LZ4 stream is broken), and an exception out of a destructor ends the
-// process. Such a bag (it stays .active) is kept, unreleased, until the process ends.
-void keep_unreleased(std::unique_ptr<rosbag::Bag> bag) {
-  static std::mutex mutex;
-  static auto* const kept = new std::vector<std::unique_ptr<rosbag::Bag>>();  // never destroyed
-  std::lock_guard<std::mutex> lock(mutex);
-  kept->push_back(std::move(bag));
-}
-
 bool is_manifest(const std::string& file) { return file.rfind("manifest", 0) == 0 && ends_with(file, ".yaml"); }
 
 // Why the folder cannot take this shard of this batch, or "" if it can. Shards of one batch may
@@ -107,17 +97,35 @@ RunInfo run_info(const Study& study, const RunSpec& run) {
   return info;
 }
 
-bool bag_complete(const std::string& path, const RunInfo& expected) {
+namespace {
+
+// bag_complete with a Bag to reopen (a new rosbag::Bag crawls the ROS packages for its encryptor
+// plugin: dearer than reading a small bag). After an error the Bag is replaced by a fresh one.
+bool bag_complete(std::unique_ptr<rosbag::Bag>& bag, const std::string& path, const RunInfo& expected) {
   try {
-    rosbag::Bag bag(path, rosbag::bagmode::Read);
-    rosbag::View info(bag, rosbag::TopicQuery(kRunInfoTopic));
-    if (info.size() != 1) return false;
-    const RunInfo::ConstPtr stored = info.begin()->instantiate<RunInfo>();
-    if (!stored || !(*stored == expected)) return false;
-    return rosbag::View(bag, rosbag::TopicQuery(kSummaryTopic)).size() == 1;
+    bag->open(path, rosbag::bagmode::Read);
+    bool complete = false;
+    {
+      rosbag::View info(*bag, rosbag::TopicQuery(kRunInfoTopic));
+      if (info.size() == 1) {
+        const RunInfo::ConstPtr stored = info.begin()->instantiate<RunInfo>();
+        complete = stored && *stored == expected &&
+                   rosbag::View(*bag, rosbag::TopicQuery(kSummaryTopic)).size() == 1;
+      }
+    }
+    bag->close();
+    return complete;
   } catch (const std::exception&) {  // rosbag::BagException, ros::Exception: unreadable
+    bag = std::make_unique<rosbag::Bag>();
     return false;
   }
+}
+
+}  // namespace
+
+bool bag_complete(const std::string& path, const RunInfo& expected) {
+  auto bag = std::make_unique<rosbag::Bag>();
+  return bag_complete(bag, path, expected);
 }
 
 std::vector<RunSpec> prepare_folder(const ModelConfig& model, const BatchSettings& settings,
@@ -147,9 +155,10 @@ std::vector<RunSpec> prepare_folder(const Study& study, const BatchSettings& set
   }
 
   std::vector<RunSpec> todo;
+  auto reader = std::make_unique<rosbag::Bag>();
   for (const RunSpec& run : runs) {
     const fs::path bag = bag_path(settings.output_dir, run.name);
-    if (fs::exists(bag) && bag_complete(bag.string(), run_info(study, run))) continue;
+    if (fs::exists(bag) && bag_complete(reader, bag.string(), run_info(study, run))) continue;
     fs::remove(bag);
     fs::remove(active_path(settings.output_dir, run.name));
     todo.push_back(run);
@@ -285,8 +294,7 @@ void BagSink::loop() {
   for (auto& kv : open_) {  // runs that never finished: their bags stay .active
     try {
       kv.second.bag->close();
-    } catch (...) {
-      keep_unreleased(std::move(kv.second.bag));
+    } catch (...) {  // e.g. a full disk: the file stays .active, unfinished
     }
   }
   open_.clear();
@@ -302,9 +310,9 @@ void BagSink::write(Item& item) {
     const auto b = open_.find(item.id);
     if (b == open_.end()) throw;
     const std::string file = active_path(folder_, b->second.name).string();
-    keep_unreleased(std::move(b->second.bag));
-    open_.erase(b);
-    throw std::runtime_error("cannot write " + file + ": " + e.what());
+    open_.erase(b);  // closes the file unfinished: it stays .active
+    // BagWriter's errors name the file already.
+    throw std::runtime_error("cannot write " + (dynamic_cast<const BagWriteError*>(&e) ? "" : file + ": ") + e.what());
   }
 }
 
@@ -312,9 +320,8 @@ void BagSink::write_bag(Item& item) {
   if (auto* open = std::get_if<Open>(&item.what)) {
     OpenBag& b = open_[item.id];
     b.name = open->name;
-    b.bag = std::make_unique<rosbag::Bag>();
-    b.bag->open(active_path(folder_, b.name).string(), rosbag::bagmode::Write);
-    b.bag->setCompression(rosbag::compression::LZ4);
+    b.bag = std::make_unique<BagWriter>();
+    b.bag->open(active_path(folder_, b.name).string());
     // Bag times are the header stamps, except that run_info goes 1 ns before t = 0 and the summary
     // 1 ns after T: readers in time order (rosbag::View, rosbag play) meet them first and last
     // rather than tied with the states at t = 0 and T.

@@ -4,19 +4,24 @@
 #include <ros/console.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
+#include <mutex>
 #include <optional>
 #include <set>
 #include <sstream>
+#include <thread>
 
 #include "gear_dynamics/GearState.h"
 #include "gear_dynamics/RunInfo.h"
@@ -181,20 +186,21 @@ struct BagContents {
   std::vector<double> t, delta, delta_dot;  // every GearState, if asked for (SI)
 };
 
-// Reads one bag (the series rows only if `e` is given, the states only if `states`). Throws Skip or
-// rosbag's exceptions.
-BagContents read_bag(const fs::path& path, const ManifestRun* e, bool states) {
+// Reads one bag (the series rows only if `e` is given, the states only if `states`) with `bag`, a
+// closed Bag that is reopened for each file: constructing a rosbag::Bag crawls the ROS packages for
+// its encryptor plugin, which costs more than reading a small bag. Throws Skip or rosbag's
+// exceptions (the caller then replaces `bag`).
+BagContents read_bag(rosbag::Bag& bag, const fs::path& path, const ManifestRun* e, bool states) {
   const auto require = [](bool ok, const std::string& why) {
     if (!ok) throw Skip(why);
   };
-  rosbag::Bag bag(path.string(), rosbag::bagmode::Read);
+  bag.open(path.string(), rosbag::bagmode::Read);
   std::vector<std::string> topics{kRunInfoTopic, kSummaryTopic};
   if (e || states) topics.emplace_back(kStateTopic);
-  rosbag::View view(bag, rosbag::TopicQuery(topics));
   BagContents c;
   std::ostringstream rows;
   rows.precision(10);
-  for (const rosbag::MessageInstance& m : view) {
+  for (const rosbag::MessageInstance& m : rosbag::View(bag, rosbag::TopicQuery(topics))) {
     const std::string& topic = m.getTopic();
     if (topic == kRunInfoTopic) {
       ++c.infos;
@@ -220,6 +226,7 @@ BagContents read_bag(const fs::path& path, const ManifestRun* e, bool states) {
     }
   }
   c.series = rows.str();
+  bag.close();
   return c;
 }
 
@@ -278,73 +285,94 @@ struct BagRead {
   std::string error;
 };
 
+// The child of read_bags_in_child: reads jobs[first...] and sends a frame per bag into the pipe,
+// then _exit (no destructors, no atexit).
+[[noreturn]] void read_bags_into_pipe(const std::vector<BagJob>& jobs, std::size_t first, const int fds[2]) {
+  ::close(fds[0]);
+  auto bag = std::make_unique<rosbag::Bag>();
+  for (std::size_t i = first; i < jobs.size(); ++i) {
+    std::uint8_t status = 0;
+    std::vector<std::uint8_t> payload;
+    try {
+      payload = serialize(read_bag(*bag, jobs[i].file, jobs[i].series_of, jobs[i].states));
+    } catch (const std::exception& ex) {
+      bag = std::make_unique<rosbag::Bag>();
+      status = dynamic_cast<const Skip*>(&ex) ? 1 : 2;
+      const std::string what = ex.what();
+      payload.assign(what.begin(), what.end());
+    }
+    const auto index = static_cast<std::uint32_t>(i), size = static_cast<std::uint32_t>(payload.size());
+    if (!write_all(fds[1], &index, 4) || !write_all(fds[1], &status, 1) || !write_all(fds[1], &size, 4) ||
+        !write_all(fds[1], payload.data(), payload.size()))
+      ::_exit(3);
+  }
+  ::_exit(0);
+}
+
 // Reads the bags in order in a child process. rosbag trusts a bag's index: a damaged offset makes
 // it read out of bounds and crash (one flipped byte in an index record is enough). In a child that
 // costs the bag, not the aggregator: a new child goes on with the next bag. One child reads many
 // bags because forks are dear here (a child per bag made reading 990 bags 7x slower). The child
 // sends a frame per bag: index (4 bytes), status (1: 0 contents, 1 Skip, 2 other error), payload
-// length (4) and payload (the serialized contents or the message).
-std::vector<BagRead> read_bags_isolated(const std::vector<BagJob>& jobs) {
+// length (4) and payload (the serialized contents or the message); the parent takes each frame
+// as it arrives, so no more than one bag's frame is buffered.
+std::vector<BagRead> read_bags_in_child(const std::vector<BagJob>& jobs) {
   std::vector<BagRead> out(jobs.size());
   std::vector<bool> done(jobs.size(), false);
   std::size_t first = 0;
   while (first < jobs.size()) {
     int fds[2];
-    if (::pipe2(fds, O_CLOEXEC) != 0) throw BatchReadError(std::string("cannot read bags: pipe: ") + std::strerror(errno));
-    const pid_t pid = ::fork();
+    pid_t pid;
+    {
+      // Another reader thread forking between this pipe's creation and the close of its write
+      // end below would give its child a copy of that end, and this pipe's end of file would then
+      // wait for that child as well.
+      static std::mutex forking;
+      std::lock_guard<std::mutex> lock(forking);
+      if (::pipe2(fds, O_CLOEXEC) != 0)
+        throw BatchReadError(std::string("cannot read bags: pipe: ") + std::strerror(errno));
+      pid = ::fork();
+      if (pid == 0) read_bags_into_pipe(jobs, first, fds);  // the child; does not return
+      ::close(fds[1]);
+    }
     if (pid < 0) {
       ::close(fds[0]);
-      ::close(fds[1]);
       throw BatchReadError(std::string("cannot read bags: fork: ") + std::strerror(errno));
     }
-    if (pid == 0) {  // the child: reading and the pipe only, then _exit (no destructors, no atexit)
-      ::close(fds[0]);
-      for (std::size_t i = first; i < jobs.size(); ++i) {
-        std::uint8_t status = 0;
-        std::vector<std::uint8_t> payload;
-        try {
-          payload = serialize(read_bag(jobs[i].file, jobs[i].series_of, jobs[i].states));
-        } catch (const std::exception& ex) {
-          status = dynamic_cast<const Skip*>(&ex) ? 1 : 2;
-          const std::string what = ex.what();
-          payload.assign(what.begin(), what.end());
+    std::vector<std::uint8_t> data;  // data[at...] is not yet taken
+    std::size_t at = 0;
+    const auto take_frames = [&] {  // whole frames (a crash may cut the last one)
+      while (at + 9 <= data.size()) {
+        std::uint32_t index, size;
+        std::memcpy(&index, &data[at], 4);
+        std::memcpy(&size, &data[at + 5], 4);
+        if (index >= jobs.size() || at + 9 + size > data.size()) break;
+        std::vector<std::uint8_t> payload(data.begin() + static_cast<std::ptrdiff_t>(at + 9),
+                                          data.begin() + static_cast<std::ptrdiff_t>(at + 9 + size));
+        const std::uint8_t status = data[at + 4];
+        if (status == 0) {
+          out[index].contents = deserialize(payload);
+        } else {
+          const std::string what(payload.begin(), payload.end());
+          out[index].error = status == 1 ? what : "unreadable bag (truncated or corrupted): " + what;
         }
-        const auto index = static_cast<std::uint32_t>(i), size = static_cast<std::uint32_t>(payload.size());
-        if (!write_all(fds[1], &index, 4) || !write_all(fds[1], &status, 1) || !write_all(fds[1], &size, 4) ||
-            !write_all(fds[1], payload.data(), payload.size()))
-          ::_exit(3);
+        done[index] = true;
+        at += 9 + size;
       }
-      ::_exit(0);
-    }
-    ::close(fds[1]);
-    std::vector<std::uint8_t> data;
+      data.erase(data.begin(), data.begin() + static_cast<std::ptrdiff_t>(at));
+      at = 0;
+    };
     char chunk[1 << 16];
     for (;;) {
       const ssize_t n = ::read(fds[0], chunk, sizeof chunk);
       if (n < 0 && errno == EINTR) continue;
       if (n <= 0) break;
       data.insert(data.end(), chunk, chunk + n);
+      take_frames();
     }
     ::close(fds[0]);
     int wstatus = 0;
     while (::waitpid(pid, &wstatus, 0) < 0 && errno == EINTR) {
-    }
-    for (std::size_t at = 0; at + 9 <= data.size();) {  // whole frames (a crash may cut the last one)
-      std::uint32_t index, size;
-      std::memcpy(&index, &data[at], 4);
-      std::memcpy(&size, &data[at + 5], 4);
-      if (index >= jobs.size() || at + 9 + size > data.size()) break;
-      std::vector<std::uint8_t> payload(data.begin() + static_cast<std::ptrdiff_t>(at + 9),
-                                        data.begin() + static_cast<std::ptrdiff_t>(at + 9 + size));
-      const std::uint8_t status = data[at + 4];
-      if (status == 0) {
-        out[index].contents = deserialize(payload);
-      } else {
-        const std::string what(payload.begin(), payload.end());
-        out[index].error = status == 1 ? what : "unreadable bag (truncated or corrupted): " + what;
-      }
-      done[index] = true;
-      at += 9 + size;
     }
     while (first < jobs.size() && done[first]) ++first;
     if (first == jobs.size()) break;
@@ -359,13 +387,72 @@ std::vector<BagRead> read_bags_isolated(const std::vector<BagJob>& jobs) {
   return out;
 }
 
-// The run record of bag `read` of run `e`, if it is that run of this batch; else throws Skip.
-RunRecord check_run(const BagRead& read, const ManifestRun& e, const Manifest& manifest) {
+// The bags read by one child per core at once (read_bags_in_child; bag i goes to reader
+// i mod readers), each child's pipe drained by a thread of its own.
+std::vector<BagRead> read_bags_isolated(const std::vector<BagJob>& jobs) {
+  const std::size_t readers =
+      std::min<std::size_t>(std::max(1u, std::thread::hardware_concurrency()), std::max<std::size_t>(1, jobs.size()));
+  std::vector<std::vector<BagJob>> part(readers);
+  for (std::size_t i = 0; i < jobs.size(); ++i) part[i % readers].push_back(jobs[i]);
+  std::vector<std::vector<BagRead>> read(readers);
+  std::vector<std::exception_ptr> error(readers);
+  std::vector<std::thread> threads;
+  for (std::size_t r = 0; r < readers; ++r)
+    threads.emplace_back([&, r] {
+      try {
+        read[r] = read_bags_in_child(part[r]);
+      } catch (...) {
+        error[r] = std::current_exception();
+      }
+    });
+  for (std::thread& t : threads) t.join();
+  for (const std::exception_ptr& e : error)
+    if (e) std::rethrow_exception(e);
+  std::vector<BagRead> out(jobs.size());
+  for (std::size_t i = 0; i < jobs.size(); ++i) out[i] = std::move(read[i % readers][i / readers]);
+  return out;
+}
+
+// A run_info's parameters_yaml as check_run compares it: its config_key and study point, or why
+// it is not a configuration.
+struct ParsedParameters {
+  std::string key, error;
+  std::size_t point = ~std::size_t{0};
+};
+
+// parameters_yaml texts already parsed: the runs of one mu (of one point) share one text, and YAML
+// parsing was most of the reading time.
+class ParametersCache {
+ public:
+  const ParsedParameters& parse(const std::string& text) {
+    const auto found = parsed_.find(text);
+    if (found != parsed_.end()) return found->second;
+    ParsedParameters p;
+    try {
+      const YAML::Node n = YAML::Load(text);
+      p.key = config_key(parse_config(n));
+      try {
+        p.point = n["study"]["point"].as<std::size_t>();
+      } catch (const YAML::Exception&) {
+      }
+    } catch (const std::exception& ex) {
+      p.error = ex.what();
+    }
+    return parsed_.emplace(text, std::move(p)).first->second;
+  }
+
+ private:
+  std::map<std::string, ParsedParameters> parsed_;
+};
+
+// The run record of bag `read` of run `e`, if it is that run of this batch (its series moved out of
+// `read`); else throws Skip.
+RunRecord check_run(BagRead& read, const ManifestRun& e, const Manifest& manifest, ParametersCache& parameters) {
   const auto require = [](bool ok, const std::string& why) {
     if (!ok) throw Skip(why);
   };
   if (!read.contents) throw Skip(read.error);
-  const BagContents& bag = *read.contents;
+  BagContents& bag = *read.contents;
   const int infos = static_cast<int>(bag.infos), summaries = static_cast<int>(bag.summaries);
   require(infos == 1, "has " + std::to_string(infos) + " " + kRunInfoTopic + " messages, expected 1");
   require(summaries == 1, summaries == 0 ? std::string("has no ") + kSummaryTopic + " (the run did not finish)"
@@ -381,26 +468,14 @@ RunRecord check_run(const BagRead& read, const ManifestRun& e, const Manifest& m
               std::to_string(e.realization) + ", " + std::to_string(e.mu) + ") (a bag of another batch)");
   require(info->seed == c.seed, "run_info seed " + std::to_string(info->seed) + " differs from the batch's " +
                                     std::to_string(c.seed) + " (a bag of another batch)");
-  std::string key;
-  YAML::Node parameters;
-  try {
-    parameters = YAML::Load(info->parameters_yaml);
-    key = config_key(parse_config(parameters));
-  } catch (const std::exception& ex) {
-    throw Skip(std::string("run_info parameters_yaml is not a valid configuration: ") + ex.what());
-  }
+  const ParsedParameters& parsed = parameters.parse(info->parameters_yaml);
+  if (!parsed.error.empty()) throw Skip("run_info parameters_yaml is not a valid configuration: " + parsed.error);
   const std::string& expected = manifest.study ? manifest.point_keys.at(e.point) : manifest.config_key;
-  require(key == expected, "run_info configuration differs from the manifest's at " + first_difference(expected, key) +
-                               " (a bag of another batch)");
-  if (manifest.study) {
-    std::size_t point = ~std::size_t{0};
-    try {
-      point = parameters["study"]["point"].as<std::size_t>();
-    } catch (const YAML::Exception&) {
-    }
-    require(point == e.point, "run_info study.point differs from the manifest's point " + std::to_string(e.point) +
-                                  " (a bag of another batch)");
-  }
+  require(parsed.key == expected, "run_info configuration differs from the manifest's at " +
+                                      first_difference(expected, parsed.key) + " (a bag of another batch)");
+  if (manifest.study)
+    require(parsed.point == e.point, "run_info study.point differs from the manifest's point " +
+                                         std::to_string(e.point) + " (a bag of another batch)");
   require(same(info->time_step, c.run.time_step) && same(info->duration, c.run.duration),
           "run_info time_step/duration differ from the manifest's (a bag of another batch)");
   require(summary->run_name == e.name && summary->kind == to_string(e.kind) && summary->realization == e.realization &&
@@ -431,15 +506,16 @@ RunRecord check_run(const BagRead& read, const ManifestRun& e, const Manifest& m
   r.snapshot_times = summary->snapshot_times;
   r.snapshot_delta = summary->snapshot_delta;
   r.snapshot_delta_dot = summary->snapshot_delta_dot;
-  r.series_times = bag.t;
-  r.series_delta = bag.delta;
-  r.series_delta_dot = bag.delta_dot;
+  r.series_times = std::move(bag.t);
+  r.series_delta = std::move(bag.delta);
+  r.series_delta_dot = std::move(bag.delta_dot);
   return r;
 }
 
 }  // namespace
 
 BatchInputs read_batches(const std::vector<std::string>& folder_args, const ReadOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
   BatchInputs in;
   // The folders, each once.
   std::vector<fs::path> folders;
@@ -542,6 +618,7 @@ BatchInputs read_batches(const std::vector<std::string>& folder_args, const Read
     std::string rows, reason;  // its series rows, or why it is not usable
   };
   std::map<std::string, std::vector<Candidate>> candidates;
+  ParametersCache parameters;
   for (const auto& [name, entry] : listed)
     for (const fs::path& folder : folders)
       if (fs::exists(folder / entry.first.file)) {
@@ -569,13 +646,14 @@ BatchInputs read_batches(const std::vector<std::string>& folder_args, const Read
       }
     }
     if (jobs.empty()) break;
-    const std::vector<BagRead> reads = read_bags_isolated(jobs);
+    std::vector<BagRead> reads = read_bags_isolated(jobs);
     for (std::size_t i = 0; i < reads.size(); ++i) {
       Candidate& c = *round[i].first;
       c.tried = true;
       try {
-        c.record = check_run(reads[i], round[i].second->first, *round[i].second->second);
-        c.rows = reads[i].contents->series;
+        c.record = check_run(reads[i], round[i].second->first, *round[i].second->second, parameters);
+        c.rows = std::move(reads[i].contents->series);
+        reads[i].contents.reset();
       } catch (const Skip& ex) {
         c.reason = ex.what();
       }
@@ -584,12 +662,12 @@ BatchInputs read_batches(const std::vector<std::string>& folder_args, const Read
   std::map<fs::path, std::size_t> usable;  // runs each folder provides
   for (const auto& [name, entry] : listed) {
     std::string used;
-    for (const Candidate& c : candidates[name]) {
+    for (Candidate& c : candidates[name]) {
       if (!used.empty()) {  // the folder still contributes this run
         skip(c.file, "duplicate of " + used + " (not read)");
         ++usable[c.folder];
       } else if (c.record) {
-        in.runs.push_back(*c.record);
+        in.runs.push_back(std::move(*c.record));
         used = c.file.string();
         ++usable[c.folder];
         series << c.rows;
@@ -611,8 +689,10 @@ BatchInputs read_batches(const std::vector<std::string>& folder_args, const Read
       throw BatchReadError("batch folder '" + folder.string() + "' has no usable bag (" +
                            std::to_string(in.skipped.size()) + " skipped, " + std::to_string(in.missing.size()) +
                            " runs missing)");
-  ROS_INFO("batch: %zu of %zu runs read from %zu folder(s); %zu bags skipped, %zu missing (runs or shards)", in.runs.size(),
-           in.expected_runs, folders.size(), in.skipped.size(), in.missing.size());
+  ROS_INFO("batch: %zu of %zu runs read from %zu folder(s) in %.2f s; %zu bags skipped, %zu missing (runs or shards)",
+           in.runs.size(), in.expected_runs, folders.size(),
+           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), in.skipped.size(),
+           in.missing.size());
   return in;
 }
 
@@ -627,6 +707,20 @@ bool batch_complete(const std::string& folder) {
   } catch (const std::exception&) {
     return false;
   }
+}
+
+std::string manifests_signature(const std::string& folder) {
+  std::ostringstream out;
+  try {
+    for (const fs::path& p : manifests_in(folder)) {
+      struct stat st {};
+      if (::stat(p.c_str(), &st) != 0) continue;
+      out << p.filename().string() << ' ' << st.st_ino << ' ' << st.st_size << ' ' << st.st_mtim.tv_sec << '.'
+          << st.st_mtim.tv_nsec << '\n';
+    }
+  } catch (const std::exception&) {  // the folder is not there (yet)
+  }
+  return out.str();
 }
 
 }  // namespace gear_dynamics

@@ -19,11 +19,8 @@
 #include <vector>
 
 #include "gear_dynamics/montecarlo/batch.hpp"
+#include "gear_dynamics/ros/bag_writer.hpp"
 #include "gear_dynamics/ros/conversions.hpp"
-
-namespace rosbag {
-class Bag;
-}
 
 namespace gear_dynamics {
 
@@ -64,7 +61,8 @@ void write_manifest(const Study& study, const BatchSettings& settings,
                     const std::vector<RunSpec>& runs, bool complete);
 
 // Writes the bags on a thread of its own, fed through a bounded queue: bag writing overlaps with
-// stepping, and memory stays bounded (the queue, plus one open bag per lane in flight).
+// stepping, and memory stays bounded (the queue, plus one open bag per lane in flight). The bags
+// are written by BagWriter, byte for byte what rosbag::Bag writes, at a fraction of its cost.
 class BagSink : public BatchSink {
  public:
   BagSink(const ModelConfig& model, std::string folder, std::size_t queue_capacity = 1 << 15);
@@ -120,7 +118,7 @@ class BagSink : public BatchSink {
 
   struct OpenBag {
     std::string name;
-    std::unique_ptr<rosbag::Bag> bag;
+    std::unique_ptr<BagWriter> bag;
   };
   std::unordered_map<std::size_t, OpenBag> open_;  // by RunSpec::id; writer thread only
   std::atomic<std::size_t> written_{0};

@@ -35,4 +35,9 @@ BatchInputs read_batches(const std::vector<std::string>& folders, const ReadOpti
 // for a batch). Never throws.
 bool batch_complete(const std::string& folder);
 
+// The folder's manifests as they are on disk (names, inodes, sizes, modification times): it changes
+// whenever a writer rewrites one, which it does after its last bag (doc/batch-folder.md §2.4). A
+// waiter re-checks batch_complete only then, as parsing a large manifest is dear. Never throws.
+std::string manifests_signature(const std::string& folder);
+
 }  // namespace gear_dynamics
