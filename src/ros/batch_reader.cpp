@@ -19,6 +19,7 @@
 #include <sstream>
 
 #include "gear_dynamics/GearState.h"
+#include "gear_dynamics/PoincarePoint.h"
 #include "gear_dynamics/RunInfo.h"
 #include "gear_dynamics/RunSummary.h"
 
@@ -179,6 +180,7 @@ struct BagContents {
   RunSummary summary;
   std::string series;  // GearState rows in the paper's units, if asked for
   std::vector<double> t, delta, delta_dot;  // every GearState, if asked for (SI)
+  std::vector<double> section_t, section_delta, section_delta_dot;  // every PoincarePoint (SI)
 };
 
 // Reads one bag (the series rows only if `e` is given, the states only if `states`). Throws Skip or
@@ -188,7 +190,7 @@ BagContents read_bag(const fs::path& path, const ManifestRun* e, bool states) {
     if (!ok) throw Skip(why);
   };
   rosbag::Bag bag(path.string(), rosbag::bagmode::Read);
-  std::vector<std::string> topics{kRunInfoTopic, kSummaryTopic};
+  std::vector<std::string> topics{kRunInfoTopic, kSummaryTopic, kPoincareTopic};
   if (e || states) topics.emplace_back(kStateTopic);
   rosbag::View view(bag, rosbag::TopicQuery(topics));
   BagContents c;
@@ -206,6 +208,12 @@ BagContents read_bag(const fs::path& path, const ManifestRun* e, bool states) {
       const RunSummary::ConstPtr summary = m.instantiate<RunSummary>();
       require(summary != nullptr, topic + " holds " + m.getDataType() + ", not gear_dynamics/RunSummary");
       c.summary = *summary;
+    } else if (topic == kPoincareTopic) {
+      const PoincarePoint::ConstPtr p = m.instantiate<PoincarePoint>();
+      require(p != nullptr, topic + " holds " + m.getDataType() + ", not gear_dynamics/PoincarePoint");
+      c.section_t.push_back(p->t);
+      c.section_delta.push_back(p->delta);
+      c.section_delta_dot.push_back(p->delta_dot);
     } else {
       const GearState::ConstPtr s = m.instantiate<GearState>();
       require(s != nullptr, topic + " holds " + m.getDataType() + ", not gear_dynamics/GearState");
@@ -235,6 +243,9 @@ void fields(Stream& stream, Contents& c) {
   stream.next(c.t);
   stream.next(c.delta);
   stream.next(c.delta_dot);
+  stream.next(c.section_t);
+  stream.next(c.section_delta);
+  stream.next(c.section_delta_dot);
 }
 
 std::vector<std::uint8_t> serialize(const BagContents& c) {
@@ -414,6 +425,8 @@ RunRecord check_run(const BagRead& read, const ManifestRun& e, const Manifest& m
               all_finite(summary->snapshot_times) && all_finite(summary->snapshot_delta) &&
               all_finite(summary->snapshot_delta_dot),
           "summary holds a non-finite value");
+  require(all_finite(bag.section_t) && all_finite(bag.section_delta) && all_finite(bag.section_delta_dot),
+          std::string(kPoincareTopic) + " holds a non-finite value");
 
   RunRecord r;
   r.name = e.name;
@@ -434,6 +447,9 @@ RunRecord check_run(const BagRead& read, const ManifestRun& e, const Manifest& m
   r.series_times = bag.t;
   r.series_delta = bag.delta;
   r.series_delta_dot = bag.delta_dot;
+  r.section_times = bag.section_t;
+  r.section_delta = bag.section_delta;
+  r.section_delta_dot = bag.section_delta_dot;
   return r;
 }
 
