@@ -167,12 +167,6 @@ PoincareSampler::PoincareSampler(int lanes, double time_step, double period, dou
   if (!(period > 0) || !(offset >= 0)) throw std::invalid_argument("PoincareSampler: period must be > 0 and offset >= 0");
 }
 
-void PoincareSampler::reset() {
-  k_ = 0;
-  due_ = false;
-  for (auto& p : points_) p.clear();
-}
-
 void PoincareSampler::emit(double t, const Eigen::Ref<const Eigen::ArrayXd>& delta,
                            const Eigen::Ref<const Eigen::ArrayXd>& velocity, bool grid, double s) {
   for (Eigen::Index l = 0; l < delta.size(); ++l) {

@@ -114,7 +114,6 @@ class PoincareSampler {
   // Grid step n (from n = 0, in order, one after the other) and the lanes' state there.
   void observe(std::int64_t n, const Eigen::Ref<const Eigen::ArrayXd>& delta,
                const Eigen::Ref<const Eigen::ArrayXd>& velocity);
-  void reset();
   const std::vector<std::vector<SectionPoint>>& points() const { return points_; }  // per lane, in time order
 
  private:

@@ -42,7 +42,7 @@ struct RunResult {
 
 // A Poincare section taken while the run is stepped (PoincareSampler, doc/nonlinear-dynamics.md
 // §3): (delta, delta_dot) of every lane at t_k = offset + k period, 0 <= t_k <= T, into
-// RunResult::section. period 0: none.
+// RunResult::section, for a run that starts at t = 0. period 0: none.
 struct SectionTimes {
   double period = 0;  // [s]
   double offset = 0;  // [s]
