@@ -6,7 +6,7 @@ usage: plot_report.py REPORT_FOLDER [--mu 0.04]
 For a study with more axes than mu (points.csv with more than one axis column, doc/studies.md) it
 draws the study's figures instead: axis_<key>.png per swept axis and, for a 2-D grid,
 heatmap_d.png and heatmap_both_in.png. Both also get the figures over time, one line or panel per
-mu or point: safety_over_time.png, first_passage.png and spectrum_band.png.
+mu or point: safety_over_time.png, first_passage.png, spectrum_band.png and poincare.png.
 
 Every number comes from the CSV files the aggregator wrote (paper units); this script only draws.
 --mu selects the friction coefficient of the series and joint-PDF figures (the paper's 0.04).
@@ -286,10 +286,37 @@ def spectrum_figure(folder, out):
     out(fig, "spectrum_band.png")
 
 
+def poincare_figure(folder, out):
+    """δ against δ̇ of the phase ensemble's Poincaré points, one panel per mu or point."""
+    path = os.path.join(folder, "poincare.csv")
+    rows = read(folder, "poincare.csv") if os.path.exists(path) else []
+    if not rows:
+        return
+    groups = groups_of(rows, "phase")
+    ncol = min(3, len(groups))
+    nrow = int(math.ceil(len(groups) / ncol))
+    fig, axes = plt.subplots(nrow, ncol, figsize=(4.5 * ncol, 3.6 * nrow), sharex=True, sharey=True, squeeze=False)
+    for ax, (label, g) in zip(axes.flat, groups.items()):
+        runs = len({r["phase"] for r in g})
+        ax.scatter(col(g, "delta[mm]"), col(g, "delta_dot[mm/s]"), color="C0", s=2, lw=0, alpha=0.6)
+        ax.set_title("%s (%d runs, %d points)" % (label, runs, len(g)), fontsize=9)
+        ax.grid(alpha=0.3)
+    for ax in axes[-1]:
+        ax.set_xlabel("δ [mm]")
+    for ax in axes[:, 0]:
+        ax.set_ylabel(r"$\dot\delta$ [mm/s]")
+    for ax in list(axes.flat)[len(groups):]:
+        ax.axis("off")
+    fig.suptitle("Poincaré section of the phase ensemble (φ0 = j·φn/64) at mesh phase 0, from t = %.3g s"
+                 % min(col(rows, "t[s]")))
+    out(fig, "poincare.png")
+
+
 def over_time_figures(folder, out):
     safety_figure(folder, out)
     first_passage_figure(folder, out)
     spectrum_figure(folder, out)
+    poincare_figure(folder, out)
 
 
 def axis_columns(points):

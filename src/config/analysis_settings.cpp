@@ -75,6 +75,8 @@ const Section<AnalysisSettings>& analysis_section() {
                "settling time: first passage out of the safe set counts exits at recorded times >= this (none computed if no time is)")
           .key("spectrum_transient", GD_MEMBER(spectrum_transient), closed_open(0, kInf), "s",
                "start-up dropped before the Welch PSD of the dense realizations' delta (none computed if less than a mesh period is left)")
+          .key("poincare_transient", GD_MEMBER(poincare_transient), closed_open(0, kInf), "s",
+               "start-up dropped before the Poincare section of the phase ensemble (points at t < this are not used)")
           .key("kde", GD_MEMBER(kde), "Gaussian KDEs (Silverman's bandwidth) beside the histograms of Figs. 11 and 12");
   return section;
 }

@@ -35,6 +35,71 @@ std::vector<const RunRecord*> group_runs(const BatchInputs& in, const BatchAnaly
   return out;
 }
 
+// The phase runs of group i, by phase index j.
+std::vector<const RunRecord*> group_phase_runs(const BatchInputs& in, const BatchAnalysis& a, std::size_t i) {
+  std::vector<const RunRecord*> out;
+  for (const RunRecord& r : in.runs)
+    if (r.kind == RunKind::Phase && (a.keys.empty() ? r.mu == a.mu[i].mu : r.point == i)) out.push_back(&r);
+  std::sort(out.begin(), out.end(), [](const RunRecord* x, const RunRecord* y) { return x->index < y->index; });
+  return out;
+}
+
+// The phase ensemble's Poincare points after the transient; none (and why) if no phase run has any.
+std::optional<GroupSection> section_of(const std::vector<const RunRecord*>& phase_runs, double transient,
+                                       std::string& why_not) {
+  if (phase_runs.empty()) {
+    why_not = "no phase runs (monte_carlo.phase_ensemble false, or none of its bags usable)";
+    return std::nullopt;
+  }
+  GroupSection s;
+  for (const RunRecord* r : phase_runs) {
+    if (r->section_times.empty()) {
+      ++s.runs_without;
+      continue;
+    }
+    bool any = false;
+    for (std::size_t k = 0; k < r->section_times.size(); ++k) {
+      if (r->section_times[k] < transient - kTimeMatch) continue;
+      s.phase.push_back(r->index);
+      s.time.push_back(r->section_times[k]);
+      s.delta.push_back(r->section_delta[k]);
+      s.delta_dot.push_back(r->section_delta_dot[k]);
+      any = true;
+    }
+    if (any) ++s.runs;
+  }
+  if (s.runs_without == phase_runs.size()) {
+    why_not = "the phase runs' bags hold no /gear/poincare points (a batch folder written before the section was "
+              "recorded, doc/batch-folder.md §5): the Poincaré section is unavailable";
+    return std::nullopt;
+  }
+  if (s.time.empty()) {
+    why_not = "no /gear/poincare point at t >= analysis.poincare_transient = " + general(transient, 6) + " s";
+    return std::nullopt;
+  }
+  if (s.runs_without > 0)
+    why_not = std::to_string(s.runs_without) + " of " + std::to_string(phase_runs.size()) +
+              " phase runs' bags hold no /gear/poincare points: the section is of the others only";
+  return s;
+}
+
+struct Spread {
+  double mean = 0, sd = 0, min = 0, max = 0;
+};
+Spread spread_of(const std::vector<double>& x) {
+  Spread s;
+  if (x.empty()) return s;
+  s.min = *std::min_element(x.begin(), x.end());
+  s.max = *std::max_element(x.begin(), x.end());
+  double sum = 0;
+  for (double v : x) sum += v;
+  s.mean = sum / static_cast<double>(x.size());
+  double ss = 0;
+  for (double v : x) ss += (v - s.mean) * (v - s.mean);
+  s.sd = x.size() > 1 ? std::sqrt(ss / static_cast<double>(x.size() - 1)) : 0.0;
+  return s;
+}
+
 // The model of group i (a study point may change the speed, hence f_m).
 ModelConfig group_config(const BatchInputs& in, const BatchAnalysis& a, std::size_t i) {
   if (a.keys.empty() || in.points.size() <= i) return in.config;
@@ -178,6 +243,9 @@ BatchOverTime analyse_over_time(const BatchInputs& in, const BatchAnalysis& a) {
       grp.kde_delta = kde_of(all, &RunRecord::final_delta, s.delta_bins);
       grp.kde_delta_dot = kde_of(all, &RunRecord::final_delta_dot, s.delta_dot_bins);
     }
+    std::string why_no_section;
+    grp.section = section_of(group_phase_runs(in, a, i), s.poincare_transient, why_no_section);
+    if (!why_no_section.empty()) out.notes.push_back(label + ": Poincaré section: " + why_no_section);
     out.groups.push_back(std::move(grp));
   }
   return out;
@@ -243,6 +311,16 @@ std::string write_over_time(const std::string& folder, const BatchInputs& in, co
       info.row(key(i)) << ',' << general(sp.mesh_frequency) << ',' << general(sp.first.sample_rate) << ',' << general(sp.first.resolution)
                        << ',' << general(sp.first.enbw) << ',' << sp.first.segment << ',' << general(sp.first.overlap) << ','
                        << sp.first.segments << ',' << b.runs << ',' << general(sp.transient) << '\n';
+    }
+  }
+  {
+    CsvFile c(dir / "poincare.csv", written, kh + ",phase,t[s],delta[mm],delta_dot[mm/s]");
+    for (std::size_t i = 0; i < o.groups.size(); ++i) {
+      if (!o.groups[i].section) continue;
+      const GroupSection& sec = *o.groups[i].section;
+      for (std::size_t k = 0; k < sec.time.size(); ++k)
+        c.row(key(i)) << ',' << sec.phase[k] << ',' << general(sec.time[k]) << ',' << general(sec.delta[k] * U) << ','
+                      << general(sec.delta_dot[k] * U) << '\n';
     }
   }
   if (s.kde) {
@@ -362,6 +440,29 @@ std::string write_over_time(const std::string& folder, const BatchInputs& in, co
         r << "| " << label(i) << " | " << a.mu[i].stochastic_runs << " | " << general(o.groups[i].kde_delta->bandwidth * U, 3)
           << " | " << general(o.groups[i].kde_delta_dot->bandwidth * U, 3) << " |\n";
   }
+  r << "\n## Poincaré section of the phase ensemble (doc/nonlinear-dynamics.md §3)\n\n"
+       "(δ, δ̇) of every phase run (φ0 = j·φn/64) at mesh phase 0 once per mesh period T_m, as the batch recorded them "
+       "(`/gear/poincare`, doc/batch-folder.md §5: grid states where t_k = (φn − φ0)/Ω + k·T_m is on the integration "
+       "grid, otherwise interpolated within the step, cubic Hermite in δ and linear in δ̇), from t = "
+    << general(s.poincare_transient, 6) << " s on (`analysis.poincare_transient`, after the start-up; poincare.csv). "
+       "A periodic response would put each run's points on a few fixed points; a cloud is the aperiodic rattle.\n\n"
+       "| " << head << " | phase runs | points | δ mean ± sd [mm] | δ min – max [mm] | δ̇ mean ± sd [mm/s] | "
+       "δ̇ min – max [mm/s] |\n|---|---|---|---|---|---|---|\n";
+  const bool any_section =
+      std::any_of(o.groups.begin(), o.groups.end(), [](const GroupOverTime& x) { return x.section.has_value(); });
+  for (std::size_t i = 0; i < o.groups.size(); ++i) {
+    if (!o.groups[i].section) {
+      r << "| " << label(i) << " | – | unavailable (below) | – | – | – | – |\n";
+      continue;
+    }
+    const GroupSection& sec = *o.groups[i].section;
+    const Spread d = spread_of(sec.delta), v = spread_of(sec.delta_dot);
+    r << "| " << label(i) << " | " << sec.runs << " | " << sec.time.size() << " | " << fixed(d.mean * U, 5) << " ± "
+      << fixed(d.sd * U, 5) << " | " << fixed(d.min * U, 5) << " – " << fixed(d.max * U, 5) << " | " << fixed(v.mean * U, 2)
+      << " ± " << fixed(v.sd * U, 2) << " | " << fixed(v.min * U, 2) << " – " << fixed(v.max * U, 2) << " |\n";
+  }
+  r << (any_section ? "\n![Poincaré section of the phase ensemble](poincare.png)\n" : "\n(none: see below)\n");
+
   if (!o.notes.empty()) {
     r << "\nNot computed:\n\n";
     for (const std::string& n : o.notes) r << "- " << n << "\n";

@@ -7,11 +7,6 @@
 
 namespace gear_dynamics {
 
-bool on_step_grid(double t, double h) {
-  const double r = t / h;
-  return std::abs(r - std::round(r)) <= 1e-9;
-}
-
 std::vector<PoincarePoint> poincare_section(LaneSystem& sys, const PoincareOptions& o,
                                             const std::function<void(const LaneSystem&)>& after_step) {
   const double h = sys.time_step();
@@ -57,13 +52,9 @@ std::vector<PoincarePoint> poincare_section(LaneSystem& sys, const PoincareOptio
       if (grid) { p.x[c] = x1; continue; }
       const double x0 = prev[l * dim + c];
       const int dc = sys.derivative_of(c);
-      if (dc < 0) {
-        p.x[c] = x0 + s * (x1 - x0);
-      } else {  // cubic Hermite on [t_n, t_n + h] with slopes from the derivative component
-        const double d0 = prev[l * dim + dc], d1 = sys.state(l, dc);
-        const double s2 = s * s, s3 = s2 * s;
-        p.x[c] = (2 * s3 - 3 * s2 + 1) * x0 + (s3 - 2 * s2 + s) * h * d0 + (-2 * s3 + 3 * s2) * x1 + (s3 - s2) * h * d1;
-      }
+      // Cubic Hermite on [t_n, t_n + h] with slopes from the derivative component, else linear: the
+      // batch's PoincareSampler (engine/observers.hpp) calls the same two functions.
+      p.x[c] = dc < 0 ? linear_in_step(x0, x1, s) : hermite_in_step(x0, prev[l * dim + dc], x1, sys.state(l, dc), s, h);
     }
     out.push_back(std::move(p));
     ++ls[l].k;

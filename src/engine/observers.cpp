@@ -141,4 +141,64 @@ void Snapshots::observe(std::int64_t n, const Eigen::Ref<const Eigen::ArrayXd>& 
   }
 }
 
+bool on_step_grid(double t, double h) {
+  const double r = t / h;
+  return std::abs(r - std::round(r)) <= 1e-9;
+}
+
+double hermite_in_step(double x0, double v0, double x1, double v1, double s, double h) {
+  const double s2 = s * s, s3 = s2 * s;
+  return (2 * s3 - 3 * s2 + 1) * x0 + (s3 - 2 * s2 + s) * h * v0 + (-2 * s3 + 3 * s2) * x1 + (s3 - s2) * h * v1;
+}
+
+double linear_in_step(double x0, double x1, double s) { return x0 + s * (x1 - x0); }
+
+PoincareSampler::PoincareSampler(int lanes, double time_step, double period, double offset, double end)
+    : h_(time_step),
+      period_(period),
+      offset_(offset),
+      end_(end),
+      exact_(on_step_grid(offset, time_step) && on_step_grid(period, time_step)),
+      m_(std::llround(period / time_step)),
+      n0_(std::llround(offset / time_step)),
+      delta_prev_(lanes),
+      velocity_prev_(lanes),
+      points_(static_cast<std::size_t>(lanes)) {
+  if (!(period > 0) || !(offset >= 0)) throw std::invalid_argument("PoincareSampler: period must be > 0 and offset >= 0");
+}
+
+void PoincareSampler::emit(double t, const Eigen::Ref<const Eigen::ArrayXd>& delta,
+                           const Eigen::Ref<const Eigen::ArrayXd>& velocity, bool grid, double s) {
+  for (Eigen::Index l = 0; l < delta.size(); ++l) {
+    SectionPoint p{t, delta[l], velocity[l]};
+    if (!grid) {
+      p.delta = hermite_in_step(delta_prev_[l], velocity_prev_[l], delta[l], velocity[l], s, h_);
+      p.delta_dot = linear_in_step(velocity_prev_[l], velocity[l], s);
+    }
+    points_[static_cast<std::size_t>(l)].push_back(p);
+  }
+  ++k_;
+}
+
+void PoincareSampler::observe(std::int64_t n, const Eigen::Ref<const Eigen::ArrayXd>& delta,
+                              const Eigen::Ref<const Eigen::ArrayXd>& velocity) {
+  const double t = static_cast<double>(n) * h_;
+  if (exact_) {
+    if (n == n0_ + k_ * m_ && t <= end_ + 1e-9 * h_) emit(t, delta, velocity, true, 1.0);
+    return;
+  }
+  if (due_) {  // t_k was in the step just taken: poincare_section's s = (t_k - t_n) / h
+    const double tk = offset_ + static_cast<double>(k_) * period_;
+    emit(tk, delta, velocity, false, (tk - t_prev_) / h_);
+    due_ = false;
+  }
+  const double next = offset_ + static_cast<double>(k_) * period_;
+  if (next <= t + h_ && next <= end_) {
+    due_ = true;
+    t_prev_ = t;
+    delta_prev_ = delta;
+    velocity_prev_ = velocity;
+  }
+}
+
 }  // namespace gear_dynamics

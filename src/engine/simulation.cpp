@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <numeric>
+#include <optional>
 
 #include "gear_dynamics/engine/observers.hpp"
 
@@ -22,7 +23,7 @@ double grid_time(std::int64_t n, double time_step) {
 }
 
 std::vector<RunResult> simulate(Ensemble& ensemble, const RunSettings& settings,
-                                const Recorder& recorder) {
+                                const Recorder& recorder, const SectionTimes& section) {
   const int lanes = ensemble.lanes();
   // The observers keep the padding lanes too, so that each step is one pass over whole packets.
   const int padded = ensemble.padded_lanes();
@@ -39,6 +40,9 @@ std::vector<RunResult> simulate(Ensemble& ensemble, const RunSettings& settings,
   std::vector<std::int64_t> snapshot_steps;
   for (double t : settings.snapshot_times) snapshot_steps.push_back(settings.steps_for(t));
   Snapshots snaps(lanes, snapshot_steps);
+  std::optional<PoincareSampler> poincare;
+  if (section.period > 0)
+    poincare.emplace(lanes, settings.time_step, section.period, section.offset, settings.duration);
 
   // Only the windows that are ever read need the sliding observer: the last one, or all of them
   // when recording.
@@ -57,6 +61,7 @@ std::vector<RunResult> simulate(Ensemble& ensemble, const RunSettings& settings,
       if (ranged) range.observe_packet(p, d, Packet(Eigen::Map<const Packet>(velocity + p)));
     }
     if (snaps.due(n)) snaps.observe(n, ensemble.delta(), ensemble.velocity(), ensemble.load());
+    if (poincare) poincare->observe(n, ensemble.delta(), ensemble.velocity());
     if (recorder.every > 0 && n % recorder.every == 0)
       recorder.record(ensemble, range.center_distance().head(lanes));
   };
@@ -82,6 +87,7 @@ std::vector<RunResult> simulate(Ensemble& ensemble, const RunSettings& settings,
     r.final_delta = ensemble.delta()[i];
     r.final_delta_dot = ensemble.velocity()[i];
     r.final_load = ensemble.load()[i];
+    if (poincare) r.section = poincare->points()[static_cast<std::size_t>(i)];
     for (std::size_t k = 0; k < snaps.taken(); ++k) {
       const auto kk = static_cast<Eigen::Index>(k);
       r.snapshots.push_back({static_cast<double>(snapshot_steps[k]) * settings.time_step,

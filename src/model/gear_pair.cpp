@@ -77,4 +77,8 @@ double GearPair::max_contact_frequency(double mu) const {
   return std::sqrt(q_max * std::max(k1, k2));
 }
 
+double first_mesh_period_start(const GearPair& gear) {
+  return gear.in.mesh_phase == 0.0 ? 0.0 : (gear.mesh_period_angle - gear.in.mesh_phase) / gear.in.pinion_speed;
+}
+
 }  // namespace gear_dynamics

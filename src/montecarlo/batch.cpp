@@ -155,9 +155,15 @@ void run_batch(const Study& study, const std::vector<RunSpec>& runs,
       gear.mesh_phase = block.front().mesh_phase;
       std::vector<LaneSpec> lanes;
       for (const RunSpec& r : block) lanes.push_back(run_lane(study, r));
-      Ensemble ensemble(derive(gear), point.run.time_step, point.initial, std::move(lanes), point.seed);
+      const GearPair pair = derive(gear);
+      // The deterministic runs' Poincare section at mesh phase 0, once per mesh period
+      // (doc/batch-folder.md §5): the same times as gear_analyze poincare.
+      SectionTimes section;
+      if (std::any_of(block.begin(), block.end(), [](const RunSpec& r) { return r.kind != RunKind::Stochastic; }))
+        section = {pair.mesh_period_angle / pair.in.pinion_speed, first_mesh_period_start(pair)};
+      Ensemble ensemble(pair, point.run.time_step, point.initial, std::move(lanes), point.seed);
       sink.started(block);
-      const std::vector<RunResult> results = simulate(ensemble, point.run, recorder);
+      const std::vector<RunResult> results = simulate(ensemble, point.run, recorder, section);
       if (recorder.every == 0) control.realization_steps += width * total;
       sink.finished(block, results);
     } catch (const Abandon&) {

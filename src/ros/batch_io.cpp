@@ -101,7 +101,8 @@ namespace {
 
 // bag_complete with a Bag to reopen (a new rosbag::Bag crawls the ROS packages for its encryptor
 // plugin: dearer than reading a small bag). After an error the Bag is replaced by a fresh one.
-bool bag_complete(std::unique_ptr<rosbag::Bag>& bag, const std::string& path, const RunInfo& expected) {
+bool bag_complete(std::unique_ptr<rosbag::Bag>& bag, const std::string& path, const RunInfo& expected,
+                  bool with_section) {
   try {
     bag->open(path, rosbag::bagmode::Read);
     bool complete = false;
@@ -110,6 +111,7 @@ bool bag_complete(std::unique_ptr<rosbag::Bag>& bag, const std::string& path, co
       if (info.size() == 1) {
         const RunInfo::ConstPtr stored = info.begin()->instantiate<RunInfo>();
         complete = stored && *stored == expected &&
+                   (!with_section || rosbag::View(*bag, rosbag::TopicQuery(kPoincareTopic)).size() > 0) &&
                    rosbag::View(*bag, rosbag::TopicQuery(kSummaryTopic)).size() == 1;
       }
     }
@@ -123,9 +125,17 @@ bool bag_complete(std::unique_ptr<rosbag::Bag>& bag, const std::string& path, co
 
 }  // namespace
 
-bool bag_complete(const std::string& path, const RunInfo& expected) {
+bool bag_complete(const std::string& path, const RunInfo& expected, bool with_section) {
   auto bag = std::make_unique<rosbag::Bag>();
-  return bag_complete(bag, path, expected);
+  return bag_complete(bag, path, expected, with_section);
+}
+
+bool records_section(const Study& study, const RunSpec& run) {
+  if (run.kind == RunKind::Stochastic) return false;
+  const ModelConfig& c = study.points.at(run.point).config;
+  GearInputs gear = c.gear;
+  gear.mesh_phase = run.mesh_phase;
+  return first_mesh_period_start(derive(gear)) <= c.run.duration;
 }
 
 std::vector<RunSpec> prepare_folder(const ModelConfig& model, const BatchSettings& settings,
@@ -158,7 +168,8 @@ std::vector<RunSpec> prepare_folder(const Study& study, const BatchSettings& set
   auto reader = std::make_unique<rosbag::Bag>();
   for (const RunSpec& run : runs) {
     const fs::path bag = bag_path(settings.output_dir, run.name);
-    if (fs::exists(bag) && bag_complete(reader, bag.string(), run_info(study, run))) continue;
+    if (fs::exists(bag) && bag_complete(reader, bag.string(), run_info(study, run), records_section(study, run)))
+      continue;
     fs::remove(bag);
     fs::remove(active_path(settings.output_dir, run.name));
     todo.push_back(run);
@@ -249,7 +260,10 @@ void BagSink::finished(const std::vector<RunSpec>& block, const std::vector<RunR
   std::vector<Item> items;
   for (std::size_t i = 0; i < block.size(); ++i) {
     const RunSpec& r = block[i];
-    items.push_back({r.id, Close{make_summary(r.name, r.kind, r.index, r.mu, r.mesh_phase, model_.run, results[i])}});
+    Close close{{}, make_summary(r.name, r.kind, r.index, r.mu, r.mesh_phase, model_.run, results[i])};
+    if (r.kind != RunKind::Stochastic)  // the section of the deterministic runs only (doc/batch-folder.md §5)
+      for (const SectionPoint& p : results[i].section) close.section.push_back(make_poincare_point(p));
+    items.push_back({r.id, std::move(close)});
   }
   push(std::move(items));
 }
@@ -330,6 +344,7 @@ void BagSink::write_bag(Item& item) {
     open_.at(item.id).bag->write(kStateTopic, state->header.stamp, *state);
   } else if (auto* close = std::get_if<Close>(&item.what)) {
     OpenBag& b = open_.at(item.id);
+    for (const PoincarePoint& p : close->section) b.bag->write(kPoincareTopic, sim_stamp(p.t), p);
     b.bag->write(kSummaryTopic, close->summary.header.stamp + ros::Duration(0, 1), close->summary);
     b.bag->close();
     fs::rename(active_path(folder_, b.name), bag_path(folder_, b.name));

@@ -24,6 +24,7 @@
 #include <thread>
 
 #include "gear_dynamics/GearState.h"
+#include "gear_dynamics/PoincarePoint.h"
 #include "gear_dynamics/RunInfo.h"
 #include "gear_dynamics/RunSummary.h"
 
@@ -184,6 +185,7 @@ struct BagContents {
   RunSummary summary;
   std::string series;  // GearState rows in the paper's units, if asked for
   std::vector<double> t, delta, delta_dot;  // every GearState, if asked for (SI)
+  std::vector<double> section_t, section_delta, section_delta_dot;  // every PoincarePoint (SI)
 };
 
 // Reads one bag (the series rows only if `e` is given, the states only if `states`) with `bag`, a
@@ -195,7 +197,7 @@ BagContents read_bag(rosbag::Bag& bag, const fs::path& path, const ManifestRun* 
     if (!ok) throw Skip(why);
   };
   bag.open(path.string(), rosbag::bagmode::Read);
-  std::vector<std::string> topics{kRunInfoTopic, kSummaryTopic};
+  std::vector<std::string> topics{kRunInfoTopic, kSummaryTopic, kPoincareTopic};
   if (e || states) topics.emplace_back(kStateTopic);
   BagContents c;
   std::ostringstream rows;
@@ -212,6 +214,12 @@ BagContents read_bag(rosbag::Bag& bag, const fs::path& path, const ManifestRun* 
       const RunSummary::ConstPtr summary = m.instantiate<RunSummary>();
       require(summary != nullptr, topic + " holds " + m.getDataType() + ", not gear_dynamics/RunSummary");
       c.summary = *summary;
+    } else if (topic == kPoincareTopic) {
+      const PoincarePoint::ConstPtr p = m.instantiate<PoincarePoint>();
+      require(p != nullptr, topic + " holds " + m.getDataType() + ", not gear_dynamics/PoincarePoint");
+      c.section_t.push_back(p->t);
+      c.section_delta.push_back(p->delta);
+      c.section_delta_dot.push_back(p->delta_dot);
     } else {
       const GearState::ConstPtr s = m.instantiate<GearState>();
       require(s != nullptr, topic + " holds " + m.getDataType() + ", not gear_dynamics/GearState");
@@ -242,6 +250,9 @@ void fields(Stream& stream, Contents& c) {
   stream.next(c.t);
   stream.next(c.delta);
   stream.next(c.delta_dot);
+  stream.next(c.section_t);
+  stream.next(c.section_delta);
+  stream.next(c.section_delta_dot);
 }
 
 std::vector<std::uint8_t> serialize(const BagContents& c) {
@@ -489,6 +500,8 @@ RunRecord check_run(BagRead& read, const ManifestRun& e, const Manifest& manifes
               all_finite(summary->snapshot_times) && all_finite(summary->snapshot_delta) &&
               all_finite(summary->snapshot_delta_dot),
           "summary holds a non-finite value");
+  require(all_finite(bag.section_t) && all_finite(bag.section_delta) && all_finite(bag.section_delta_dot),
+          std::string(kPoincareTopic) + " holds a non-finite value");
 
   RunRecord r;
   r.name = e.name;
@@ -509,6 +522,9 @@ RunRecord check_run(BagRead& read, const ManifestRun& e, const Manifest& manifes
   r.series_times = std::move(bag.t);
   r.series_delta = std::move(bag.delta);
   r.series_delta_dot = std::move(bag.delta_dot);
+  r.section_times = std::move(bag.section_t);
+  r.section_delta = std::move(bag.section_delta);
+  r.section_delta_dot = std::move(bag.section_delta_dot);
   return r;
 }
 

@@ -108,6 +108,15 @@ GearState make_state(const LiveSample& s) {
   return m;
 }
 
+PoincarePoint make_poincare_point(const SectionPoint& p) {
+  PoincarePoint m;
+  m.t = p.time;
+  m.delta = p.delta;
+  m.delta_dot = p.delta_dot;
+  m.mesh_phase = 0.0;  // the section of the batch and of gear_analyze poincare
+  return m;
+}
+
 RunSummary make_summary(const std::string& run_name, RunKind kind,
                         std::uint32_t realization, double mu, double mesh_phase,
                         const RunSettings& run, const RunResult& r) {

@@ -283,7 +283,7 @@ int poincare(const Options& o) {
     gd::GearInputs gi = c.gear;
     gi.mesh_phase = j * g.mesh_period_angle / P;
     gd::GearLanes sys({gd::GearLaneSpec{gi, c.friction_coefficient, c.load.initial_mean, c.initial}}, h);
-    const double offset = j == 0 ? 0.0 : (g.mesh_period_angle - gi.mesh_phase) / gi.pinion_speed;
+    const double offset = gd::first_mesh_period_start(gd::derive(gi));  // as the batch's /gear/poincare
     ph[j] = gd::poincare_section(sys, {Tm, offset, transient, c.run.duration, {}});
   });
   std::vector<gd::PoincarePoint> st;

@@ -1,5 +1,5 @@
 // The package's C++ side of test/foxglove: what it reads from bags, as JSON for read_bags.js.
-//   cpp_reference bag FILE.bag     every GearState, RunInfo and RunSummary of the bag, through
+//   cpp_reference bag FILE.bag     every GearState, RunInfo, RunSummary and PoincarePoint of the bag, through
 //                                  rosbag::View and the package's generated C++ message classes
 //   cpp_reference batch FOLDER CSV OUT.json
 //                                  the package's own batch reader (read_batches, behind
@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "gear_dynamics/GearState.h"
+#include "gear_dynamics/PoincarePoint.h"
 #include "gear_dynamics/RunInfo.h"
 #include "gear_dynamics/RunSummary.h"
 #include "gear_dynamics/analysis/report.hpp"
@@ -144,7 +145,16 @@ std::string fields(const gd::RunSummary& m) {
       .done();
 }
 
-// {"messages": [{"topic", "type", "time", "fields"}, ...]} of the three types, in bag order (time:
+std::string fields(const gd::PoincarePoint& m) {
+  return Obj()
+      .add("t", num(m.t))
+      .add("delta", num(m.delta))
+      .add("delta_dot", num(m.delta_dot))
+      .add("mesh_phase", num(m.mesh_phase))
+      .done();
+}
+
+// {"messages": [{"topic", "type", "time", "fields"}, ...]} of the four types, in bag order (time:
 // the receive time of the bag record).
 int dump_bag(const std::string& path) {
   rosbag::Bag bag(path, rosbag::bagmode::Read);
@@ -159,6 +169,8 @@ int dump_bag(const std::string& path) {
       json = fields(*i);
     } else if (const auto r = m.instantiate<gd::RunSummary>()) {
       json = fields(*r);
+    } else if (const auto p = m.instantiate<gd::PoincarePoint>()) {
+      json = fields(*p);
     } else {
       continue;
     }

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Bags that Foxglove Studio / Lichtblick open: read_bags.js (Node.js, @foxglove/rosbag with
 @foxglove/wasm-lz4, @foxglove/rosmsg, @foxglove/rosmsg-serialization at the versions pinned in
-package-lock.json, installed here with npm ci) decodes every GearState, RunInfo and RunSummary of
+package-lock.json, installed here with npm ci) decodes every GearState, RunInfo, RunSummary and PoincarePoint of
 
   batch          every bag of a small gear_monte_carlo batch (LZ4 chunks, written by the package),
   record_launch  the bag of simulate.launch record:=true (rosbag record --lz4),

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """rosbag's Python API (an independent reader: genpy's generated classes) on a bag: every
-GearState, RunInfo and RunSummary as JSON for read_bags.js, in the format of cpp_reference
+GearState, RunInfo, RunSummary and PoincarePoint as JSON for read_bags.js, in the format of cpp_reference
 (integers as strings, doubles as JSON numbers, non-finite ones as "nan", "inf", "-inf").
 usage: py_reference.py OUT.json FILE.bag...   (OUT.json: {bag path: {"messages": [...]}})"""
 import json
@@ -10,7 +10,7 @@ import sys
 import genpy
 import rosbag
 
-TYPES = ("gear_dynamics/GearState", "gear_dynamics/RunInfo", "gear_dynamics/RunSummary")
+TYPES = ("gear_dynamics/GearState", "gear_dynamics/RunInfo", "gear_dynamics/RunSummary", "gear_dynamics/PoincarePoint")
 
 
 def value(v):

@@ -1,7 +1,7 @@
 // gear_dynamics bags read the way Foxglove Studio and Lichtblick read them: @foxglove/rosbag opens
 // the file (LZ4 chunks through @foxglove/wasm-lz4), @foxglove/rosmsg parses the message definition
 // stored in each connection of the bag, @foxglove/rosmsg-serialization decodes every GearState,
-// RunInfo and RunSummary with it. Every field is compared with the references given in the job
+// RunInfo, RunSummary and PoincarePoint with it. Every field is compared with the references given in the job
 // file (rosbag's Python API, the generated C++ classes, the package's batch reader).
 //
 //   node read_bags.js JOB.json
@@ -18,7 +18,7 @@ const { parse } = require("@foxglove/rosmsg");
 const { MessageReader } = require("@foxglove/rosmsg-serialization");
 const decompressLz4 = require("@foxglove/wasm-lz4");
 
-const TYPES = ["gear_dynamics/GearState", "gear_dynamics/RunInfo", "gear_dynamics/RunSummary"];
+const TYPES = ["gear_dynamics/GearState", "gear_dynamics/RunInfo", "gear_dynamics/RunSummary", "gear_dynamics/PoincarePoint"];
 const INTEGER = new Set(["int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64", "byte", "char"]);
 
 // A decoded value in the references' form, driven by the field's definition.
@@ -110,7 +110,8 @@ async function readBag(path) {
 // /clock, which the simulator at real_time_factor 0 advances in jumps), and @foxglove/rosbag
 // yields those of one topic in another order than rosbag's Python and C++ APIs (a heap merge).
 // `reordered` counts them.
-const key = (m) => [BigInt(m.time.sec), BigInt(m.time.nsec), BigInt(m.fields.header.seq)];
+// PoincarePoint has no header: its receive times differ (one point per mesh period).
+const key = (m) => [BigInt(m.time.sec), BigInt(m.time.nsec), BigInt(m.fields.header ? m.fields.header.seq : 0)];
 function canonical(list) {
   return [...list].sort((a, b) => {
     const ka = key(a), kb = key(b);

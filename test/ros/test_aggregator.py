@@ -320,6 +320,97 @@ class AggregatorEndToEnd(unittest.TestCase):
         for name in ("safety_over_time.png", "first_passage.png", "spectrum_band.png"):
             self.assertTrue(os.path.isfile(os.path.join(folder, name)), name)
 
+    def test_5_poincare_section_equals_an_independent_computation(self):
+        """The bags' /gear/poincare points: at t_k = (phi_n - phi0)/Omega + k T_m (from RunInfo),
+        S1's equal to its dense /gear/state series at those times exactly, and the report's
+        poincare.csv and report.md table recomputed from the phase runs' points (numpy)."""
+        r, a = self.report, self.analysis
+        transient = a["poincare_transient"]
+        rows = read_csv(r.report_folder, "poincare.csv")
+        with open(os.path.join(r.report_folder, "report.md")) as f:
+            report_md = f.read()
+        self.assertIn("## Poincaré section of the phase ensemble", report_md)
+        for f in r.friction:
+            mu = "%.10g" % f.mu
+            expected = []  # (j, t, delta [mm], delta_dot [mm/s]) of the phase runs after the transient
+            runs = sorted(((p, i) for p, i, s in self.runs if s.mu == f.mu and i.kind != "stochastic"),
+                          key=lambda x: (x[1].kind != "S1", x[1].realization))
+            self.assertEqual(len(runs), 65, mu)  # S1 and the 64 phase runs
+            for path, info in runs:
+                with rosbag.Bag(path) as bag:
+                    points = [m for _, m, _ in bag.read_messages(topics=["/gear/poincare"])]
+                    states = {round(m.t, 9): m for _, m, _ in bag.read_messages(topics=["/gear/state"])}
+                gear = yaml.safe_load(info.parameters_yaml)["gear_pair"]
+                phi_n, omega = 2 * math.pi / gear["pinion_teeth"], gear["pinion_speed"]
+                t0 = 0.0 if info.mesh_phase == 0 else (phi_n - info.mesh_phase) / omega
+                tm = phi_n / omega
+                n = int(math.floor((info.duration - t0) / tm + 1e-9)) + 1
+                self.assertEqual(len(points), n, path)
+                # t_k computed as the writer does (t_0 + k T_m in double): equal to a few ulps.
+                for k, p in enumerate(points):
+                    self.assertAlmostEqual(p.t, t0 + k * tm, delta=1e-15, msg="%s k %d" % (path, k))
+                    self.assertEqual(p.mesh_phase, 0.0)
+                if info.kind == "S1":
+                    # S1 (phi0 = 0) at 1000 rpm: t_k = 3 k ms are grid steps 3000 k, recorded by the
+                    # 100 kHz series (every 10 steps): the same grid state, bit for bit.
+                    for p in points:
+                        s = states[round(p.t, 9)]
+                        self.assertEqual((p.delta, p.delta_dot), (s.delta, s.delta_dot), "%s t %r" % (path, p.t))
+                    continue
+                expected += [(info.realization, p.t, p.delta * 1e3, p.delta_dot * 1e3) for p in points
+                             if p.t >= transient - 1e-9]
+            got = [x for x in rows if x["mu"] == mu]
+            self.assertEqual(len(got), len(expected), mu)
+            self.assertGreater(len(got), 64 * 5, mu)  # T = 0.05 s: at least 5 points per run after 0.02 s
+            for row, (j, t, d, v) in zip(got, expected):  # the order: j, then time
+                self.assertEqual(int(row["phase"]), j)
+                # 10 significant digits in the CSV.
+                for value, want in ((float(row["t[s]"]), t), (float(row["delta[mm]"]), d), (float(row["delta_dot[mm/s]"]), v)):
+                    self.assertTrue(close(value, want, 1e-9), "%s j %d t %r: %r vs %r" % (mu, j, t, value, want))
+            # report.md: points and the spread (mean +- sd with ddof 1, min - max; 5 and 2 decimals).
+            d = np.array([x[2] for x in expected])
+            v = np.array([x[3] for x in expected])
+            section = report_md.split("## Poincaré section of the phase ensemble")[1]
+            line = [x for x in section.splitlines() if x.startswith("| %.2f | " % f.mu)][0]
+            cells = [c.strip() for c in line.strip("|").split("|")]
+            self.assertEqual((int(cells[1]), int(cells[2])), (64, len(expected)), line)
+            numbers = [float(x) for c in cells[3:] for x in c.replace("±", " ").replace("–", " ").split()]
+            want = [d.mean(), d.std(ddof=1), d.min(), d.max(), v.mean(), v.std(ddof=1), v.min(), v.max()]
+            # Printed with 5 (mm) and 2 (mm/s) decimals: within half a unit of the last one (and a hair).
+            for got_x, want_x, half in zip(numbers, want, [0.5e-5 * 1.001] * 4 + [0.5e-2 * 1.001] * 4):
+                self.assertLessEqual(abs(got_x - want_x), half, "%s: %s vs %r" % (mu, line, want))
+        self.assertTrue(os.path.isfile(os.path.join(r.report_folder, "poincare.png")))
+
+    def test_6_bags_without_the_section_read_and_say_so(self):
+        """A folder of older bags (no /gear/poincare) is read as before; the report says the
+        section is unavailable for every mu instead of leaving it out silently."""
+        name = "/aggregator_old_bags"
+        rosparam.upload_params(name, {"analysis": self.analysis})
+        with tempfile.TemporaryDirectory() as old:
+            shutil.copy(os.path.join(self.folder, "manifest.yaml"), old)
+            for path, _, _ in self.runs:
+                with rosbag.Bag(path) as src, rosbag.Bag(os.path.join(old, os.path.basename(path)), "w",
+                                                         compression="lz4") as dst:
+                    for topic, msg, t in src.read_messages(raw=True):
+                        if topic != "/gear/poincare":
+                            dst.write(topic, msg, t, raw=True)
+            report = os.path.join(old, "report")
+            run = subprocess.run(["rosrun", "gear_dynamics", "gear_aggregator", "__name:=" + name[1:], "_folders:=" + old,
+                                  "_report_folder:=" + report, "_exit_when_done:=true"],
+                                 capture_output=True, text=True, timeout=60)
+            self.assertEqual(run.returncode, 0, run.stdout + run.stderr)
+            with open(os.path.join(report, "report.md")) as f:
+                report_md = f.read()
+            for f in self.report.friction:
+                self.assertIn("| %.2f | – | unavailable (below) |" % f.mu, report_md)
+                self.assertIn("mu = %.10g: Poincaré section: the phase runs' bags hold no /gear/poincare points" % f.mu,
+                              report_md)
+            self.assertEqual(read_csv(report, "poincare.csv"), [])
+            # Everything else reads as from the full bags.
+            for csv_name in ("runs.csv", "table3.csv", "safety_over_time.csv"):
+                with open(os.path.join(report, csv_name)) as a, open(os.path.join(self.report.report_folder, csv_name)) as b:
+                    self.assertEqual(a.read(), b.read(), csv_name)
+
     def test_2_rosbag_play_publishes_the_bags_gear_states(self):
         path = [p for p, info, _ in self.runs if info.kind == "stochastic" and info.realization == 0][0]
         with rosbag.Bag(path) as bag:

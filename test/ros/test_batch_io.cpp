@@ -116,6 +116,19 @@ TEST(BatchBags, OneLz4BagPerRunWithRunInfoFirstSeriesAndSummaryLast) {
       times.push_back(state->t);
     }
     ASSERT_GE(topics.size(), 3u);
+    // The Poincare section (doc/batch-folder.md §5): S1 only here (phi0 = 0, T_m = 3 ms, T = 4 ms:
+    // t = 0 and 3 ms, grid states); none for stochastic runs.
+    std::vector<double> section;
+    for (const rosbag::MessageInstance& m : rosbag::View(bag, rosbag::TopicQuery(gd::kPoincareTopic))) {
+      const auto p = m.instantiate<gd::PoincarePoint>();
+      ASSERT_TRUE(p);
+      EXPECT_EQ(m.getTime(), gd::sim_stamp(p->t));
+      EXPECT_EQ(p->mesh_phase, 0.0);
+      section.push_back(p->t);
+    }
+    const std::vector<double> expected_section =
+        r.kind == gd::RunKind::S1 ? std::vector<double>{0.0, 3000 * model.run.time_step} : std::vector<double>{};
+    EXPECT_EQ(section, expected_section) << r.name;
     EXPECT_EQ(topics.front(), gd::kRunInfoTopic) << r.name;
     EXPECT_EQ(topics.back(), gd::kSummaryTopic) << r.name;
     EXPECT_EQ(std::count(topics.begin(), topics.end(), gd::kSummaryTopic), 1);
@@ -222,6 +235,31 @@ TEST(BatchBags, ResumeRedoesOnlyMissingBrokenAndUnfinishedRuns) {
   std::ofstream(dir.path / "notes.txt") << "mine";
   s.overwrite = false;
   EXPECT_THROW(gd::prepare_folder(model, s, gd::plan_runs(model, s)), std::runtime_error);
+}
+
+// A deterministic run's bag without /gear/poincare (written before the section was recorded) is
+// not complete for the writer: a resume redoes it, and only it.
+TEST(BatchBags, ResumeRedoesDeterministicBagsWithoutTheSection) {
+  TempDir dir;
+  const gd::ModelConfig model = short_model();
+  const gd::BatchSettings s = small_batch(dir.path.string());
+  const auto runs = run_batch(model, s);
+  const gd::RunSpec& s1 = runs.front();
+  ASSERT_EQ(s1.kind, gd::RunKind::S1);
+  const fs::path path = dir.path / (s1.name + ".bag"), old = dir.path / "old.tmp";
+  {
+    rosbag::Bag in(path.string(), rosbag::bagmode::Read), out(old.string(), rosbag::bagmode::Write);
+    for (const rosbag::MessageInstance& m : rosbag::View(in))
+      if (m.getTopic() != gd::kPoincareTopic) out.write(m.getTopic(), m.getTime(), m);
+  }
+  fs::rename(old, path);
+  EXPECT_FALSE(gd::bag_complete(path.string(), gd::run_info(model, s1), true));
+  EXPECT_TRUE(gd::bag_complete(path.string(), gd::run_info(model, s1), false));
+  const auto redone = run_batch(model, s);
+  ASSERT_EQ(redone.size(), 1u);
+  EXPECT_EQ(redone.front().name, s1.name);
+  rosbag::Bag bag(path.string(), rosbag::bagmode::Read);
+  EXPECT_EQ(rosbag::View(bag, rosbag::TopicQuery(gd::kPoincareTopic)).size(), 2u);
 }
 
 TEST(BatchBags, AbandonedRunsStayActive) {

@@ -32,6 +32,10 @@ struct RunRecord {
   // The recorded /gear/state series of a stochastic run (empty for the others): every state at
   // sparse_record_rate, or at record_rate for the dense realizations. [s], [m], [m/s]
   std::vector<double> series_times, series_delta, series_delta_dot;
+  // The /gear/poincare section of a deterministic run (S1, phase): (delta, delta_dot) at mesh
+  // phase 0 once per mesh period; empty for stochastic runs and in bags written before it was
+  // recorded (doc/batch-folder.md §5). [s], [m], [m/s]
+  std::vector<double> section_times, section_delta, section_delta_dot;
 };
 
 // Statistics of one friction coefficient.

@@ -41,9 +41,10 @@ struct AnalysisSettings {
   BinSpec joint_delta_dot_bins{-0.040, 0.040, 0.004};   // Fig. 10 [m/s]
   std::vector<double> joint_times{0.30, 0.33, 0.36, 0.40};  // Fig. 10 [s], among the snapshot times
   // Over time (doc/gear_aggregator.md §5): first passage counts exits from this time on [s]; the
-  // spectrum drops the start-up before this time [s]; KDEs beside the histograms of Figs. 11, 12.
+  // spectrum drops the start-up before this time [s], the Poincare section before poincare_transient; KDEs beside the histograms of Figs. 11, 12.
   double first_passage_settle = 0.30;
   double spectrum_transient = 0.10;
+  double poincare_transient = 0.20;  // the phase ensemble's Poincare section starts here [s]
   bool kde = true;
 };
 

@@ -1,8 +1,8 @@
 // The batch-level analyses of the aggregator's report over time (doc/gear_aggregator.md §5,
 // doc/nonlinear-dynamics.md §6, §7): per group of the report (mu, or study point) safety over time
 // with Wilson bands, first passage out of the safe set with its Kaplan-Meier survival curve, the
-// mean Welch PSD of delta over the realizations with a dense series, and KDEs of delta(T) and
-// delta_dot(T). Here, not in `analysis`, because `dynamics` is the layer above it. No ROS.
+// mean Welch PSD of delta over the realizations with a dense series, KDEs of delta(T) and
+// delta_dot(T), and the Poincare section of the phase ensemble. Here, not in `analysis`, because `dynamics` is the layer above it. No ROS.
 #pragma once
 
 #include <cstdint>
@@ -36,6 +36,16 @@ struct Kde {
   std::vector<double> grid, density;
 };
 
+// The Poincare section of a group's phase ensemble (doc/nonlinear-dynamics.md §3): the
+// /gear/poincare points of its phase runs at t >= analysis.poincare_transient, by phase index j
+// then time.
+struct GroupSection {
+  std::size_t runs = 0;                // phase runs with points after the transient
+  std::size_t runs_without = 0;        // phase runs whose bag holds no point (an older batch)
+  std::vector<std::uint32_t> phase;    // per point: the run's phase index j
+  std::vector<double> time, delta, delta_dot;  // [s], [m], [m/s]
+};
+
 // One group of the report (an entry of BatchAnalysis::mu), its stochastic realizations.
 struct GroupOverTime {
   std::size_t runs = 0;             // realizations with a series
@@ -45,6 +55,7 @@ struct GroupOverTime {
   KaplanMeier survival;
   std::optional<GroupSpectrum> spectrum;
   std::optional<Kde> kde_delta, kde_delta_dot;
+  std::optional<GroupSection> section;  // none without phase runs with /gear/poincare points
 };
 
 struct BatchOverTime {
@@ -58,7 +69,7 @@ BatchOverTime analyse_over_time(const BatchInputs& inputs, const BatchAnalysis& 
 RecordedRuns common_series(const std::vector<const RunRecord*>& runs);
 
 // Writes safety_over_time.csv, first_passage.csv, survival.csv, spectrum_band.csv,
-// spectrum_peaks.csv, spectrum_info.csv and (with analysis.kde) kde.csv, in the paper's units;
+// spectrum_peaks.csv, spectrum_info.csv, poincare.csv and (with analysis.kde) kde.csv, in the paper's units;
 // returns the report.md section. Throws std::runtime_error if a file cannot be written.
 std::string write_over_time(const std::string& folder, const BatchInputs& inputs, const BatchAnalysis& analysis,
                             const BatchOverTime& over_time, std::vector<std::string>& written);

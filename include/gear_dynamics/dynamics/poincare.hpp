@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "gear_dynamics/dynamics/system.hpp"
+#include "gear_dynamics/engine/observers.hpp"  // on_step_grid, the interpolation in a step
 
 namespace gear_dynamics {
 
@@ -33,9 +34,6 @@ struct PoincarePoint {
 // every step (for statistics of the whole trajectory).
 std::vector<PoincarePoint> poincare_section(LaneSystem& system, const PoincareOptions& options,
                                             const std::function<void(const LaneSystem&)>& after_step = {});
-
-// True when t / h is a whole number to 1e-9.
-bool on_step_grid(double t, double h);
 
 // --- largest Lyapunov exponent: two trajectories with periodic renormalisation (Benettin 1980) ---
 // Lanes 2i and 2i+1 of the system form pair i: lane 2i is the reference; after the transient

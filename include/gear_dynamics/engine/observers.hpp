@@ -120,4 +120,46 @@ class Snapshots {
   Eigen::ArrayXXd delta_, velocity_, load_;
 };
 
+// True when t / h is a whole number to 1e-9 (t lies on the integration grid).
+bool on_step_grid(double t, double h);
+
+// Interpolation inside one step [t_n, t_n + h] at t_n + s h, 0 <= s <= 1 (the Poincare sections of
+// doc/nonlinear-dynamics.md §3): cubic Hermite for a state x with its derivative v = dx/dt at both
+// ends (error O(h^4)), linear for a state without one (error O(h^2)).
+double hermite_in_step(double x0, double v0, double x1, double v1, double s, double h);
+double linear_in_step(double x0, double x1, double s);
+
+// One point of a Poincare section: (delta, delta_dot) at time t.
+struct SectionPoint {
+  double time = 0;       // t_k [s]
+  double delta = 0;      // [m]
+  double delta_dot = 0;  // [m/s]
+};
+
+// (delta, delta_dot) of every lane at t_k = offset + k period, k = 0, 1, ..., t_k <= end (a Poincare
+// section at a fixed mesh phase, doc/nonlinear-dynamics.md §3), from the grid states it is shown
+// one after the other. If offset and period are whole numbers of steps (to 1e-9 of a step) the
+// points are grid states, exactly; otherwise each point is interpolated in its step, cubic Hermite
+// in delta (slopes delta_dot) and linear in delta_dot: the definition and the arithmetic of the
+// core's poincare_section (dynamics/poincare.hpp), so both give the same numbers, bit for bit.
+class PoincareSampler {
+ public:
+  PoincareSampler(int lanes, double time_step, double period, double offset, double end);
+  // Grid step n (from n = 0, in order, one after the other) and the lanes' state there.
+  void observe(std::int64_t n, const Eigen::Ref<const Eigen::ArrayXd>& delta,
+               const Eigen::Ref<const Eigen::ArrayXd>& velocity);
+  const std::vector<std::vector<SectionPoint>>& points() const { return points_; }  // per lane, in time order
+
+ private:
+  void emit(double t, const Eigen::Ref<const Eigen::ArrayXd>& delta, const Eigen::Ref<const Eigen::ArrayXd>& velocity,
+            bool grid, double s);
+  double h_, period_, offset_, end_;
+  bool exact_;
+  std::int64_t m_, n0_, k_ = 0;
+  bool due_ = false;      // t_k lies in the step that follows the last observed one
+  double t_prev_ = 0;     // time of the grid point before t_k (interpolated points)
+  Eigen::ArrayXd delta_prev_, velocity_prev_;
+  std::vector<std::vector<SectionPoint>> points_;
+};
+
 }  // namespace gear_dynamics

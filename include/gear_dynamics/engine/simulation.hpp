@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "gear_dynamics/engine/ensemble.hpp"
+#include "gear_dynamics/engine/observers.hpp"
 
 namespace gear_dynamics {
 
@@ -36,6 +37,15 @@ struct RunResult {
   bool reached_steady_state = false;    // t_ss < T, decided on grid indices (not rounded times)
   double final_delta = 0.0, final_delta_dot = 0.0, final_load = 0.0;
   std::vector<SnapshotState> snapshots;
+  std::vector<SectionPoint> section;  // the Poincare section, if asked for (SectionTimes)
+};
+
+// A Poincare section taken while the run is stepped (PoincareSampler, doc/nonlinear-dynamics.md
+// §3): (delta, delta_dot) of every lane at t_k = offset + k period, 0 <= t_k <= T, into
+// RunResult::section, for a run that starts at t = 0. period 0: none.
+struct SectionTimes {
+  double period = 0;  // [s]
+  double offset = 0;  // [s]
 };
 
 // Called at every grid step n with n % every == 0 (n = 0 and n = N included), after the step;
@@ -53,6 +63,6 @@ double grid_time(std::int64_t n, double time_step);
 
 // Runs `ensemble` from its current state (normally t = 0) to settings.duration.
 std::vector<RunResult> simulate(Ensemble& ensemble, const RunSettings& settings,
-                                const Recorder& recorder = {});
+                                const Recorder& recorder = {}, const SectionTimes& section = {});
 
 }  // namespace gear_dynamics

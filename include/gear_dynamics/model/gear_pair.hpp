@@ -53,6 +53,11 @@ struct GearPair {
   double friction_factor(double phi) const { return c0 + c1 * (x_b + base_radius1 * phi); }
 };
 
+// The first time t >= 0 at which the mesh phase (phi0 + Omega t mod phi_n) is 0, i.e. a mesh period
+// starts: 0 if phi0 = 0, else (phi_n - phi0) / Omega [s]. The Poincare sections sample there, then
+// every mesh period phi_n / Omega (doc/nonlinear-dynamics.md §3).
+double first_mesh_period_start(const GearPair& gear);
+
 // Computes every derived quantity by doc/model.md's formulas. Does not validate (see config.hpp).
 GearPair derive(const GearInputs& in);
 

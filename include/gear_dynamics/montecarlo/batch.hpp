@@ -65,6 +65,8 @@ class BatchSink {
   // At every grid step that is a multiple of the block's record_every (t = 0 and T included).
   virtual void recorded(const std::vector<RunSpec>& block, const Ensemble& ensemble,
                         const Eigen::ArrayXd& center_distance) = 0;
+  // results[i].section: the Poincare section at mesh phase 0 of every lane of a block that holds a
+  // deterministic run (S1 or phase), empty in blocks of stochastic runs only.
   virtual void finished(const std::vector<RunSpec>& block, const std::vector<RunResult>& results) = 0;
   // Stopped before the end (BatchControl::stop).
   virtual void abandoned(const std::vector<RunSpec>& block) = 0;

@@ -38,8 +38,13 @@ RunInfo run_info(const Study& study, const RunSpec& run);
 const char* manifest_format(const Study& study);
 
 // True if `path` is a complete bag of `expected`'s run: readable index, exactly one run_info equal
-// to `expected`, exactly one summary.
-bool bag_complete(const std::string& path, const RunInfo& expected);
+// to `expected`, exactly one summary, and with `with_section` at least one /gear/poincare point
+// (a deterministic run's bag written before the section was recorded is redone).
+bool bag_complete(const std::string& path, const RunInfo& expected, bool with_section = false);
+
+// Whether a run's bag holds its Poincare section (doc/batch-folder.md §5): the deterministic runs
+// (S1, phase) whose T reaches the first mesh period start.
+bool records_section(const Study& study, const RunSpec& run);
 
 // Makes settings.output_dir ready for `runs` (this shard's part of the batch) and returns the runs
 // still to do. A folder of the same batch (and split into shards) is resumed: complete bags whose
@@ -89,6 +94,7 @@ class BagSink : public BatchSink {
     RunInfo info;
   };
   struct Close {
+    std::vector<PoincarePoint> section;  // written before the summary
     RunSummary summary;
   };
   struct Abandon {};

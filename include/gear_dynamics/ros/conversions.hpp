@@ -9,6 +9,7 @@
 #include <string>
 
 #include "gear_dynamics/GearState.h"
+#include "gear_dynamics/PoincarePoint.h"
 #include "gear_dynamics/RunInfo.h"
 #include "gear_dynamics/RunSummary.h"
 #include "gear_dynamics/montecarlo/run_kind.hpp"
@@ -35,6 +36,8 @@ ModelConfig load_model_config(const ros::NodeHandle& nh);
 constexpr const char* kRunInfoTopic = "/gear/run_info";
 constexpr const char* kStateTopic = "/gear/state";
 constexpr const char* kSummaryTopic = "/gear/summary";
+// The Poincare section of a deterministic run (S1, phase): one PoincarePoint per mesh period.
+constexpr const char* kPoincareTopic = "/gear/poincare";
 constexpr const char* kManifestFormat = "gear_dynamics_batch/1";
 // A study with more axes than mu (config/sweep.hpp): points, a point per run, names p<iiii>_...
 // Readers of format 1 refuse it rather than pool its points by mu.
@@ -46,6 +49,8 @@ RunInfo make_run_info(const ModelConfig& config, RunKind kind, std::uint32_t rea
 GearState make_state(const Ensemble& ensemble, int lane, double center_distance);
 // The live simulation's sample as a message (the same numbers as make_state of its ensemble).
 GearState make_state(const LiveSample& sample);
+// A point of a run's Poincare section at mesh phase 0 (RunResult::section).
+PoincarePoint make_poincare_point(const SectionPoint& point);
 RunSummary make_summary(const std::string& run_name, RunKind kind,
                         std::uint32_t realization, double mu, double mesh_phase,
                         const RunSettings& run, const RunResult& result);
