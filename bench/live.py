@@ -26,6 +26,15 @@ import time
 import xmlrpc.client
 
 
+def source_of(devel):
+    """The gear_dynamics source folder a devel folder was built from (its CMake package config)."""
+    with open(os.path.join(devel, "share/gear_dynamics/cmake/gear_dynamicsConfig.cmake")) as f:
+        for line in f:
+            if line.startswith("set(gear_dynamics_SOURCE_PREFIX "):
+                return os.path.realpath(line.split()[1].rstrip(")"))
+    raise RuntimeError(f"{devel}: no gear_dynamics_SOURCE_PREFIX; pass --before-source")
+
+
 def free_port():
     with socket.socket() as s:
         s.bind(("localhost", 0))
@@ -48,8 +57,11 @@ class Node:
 
     def __init__(self, env, ns, args):
         self.env, self.ns = env, ns
+        # By path: with a --before build two source trees hold the package, and roslaunch refuses
+        # to pick one of two simulate.launch files by package name.
+        launch = os.path.join(env["GD_SOURCE"], "launch", "simulate.launch")
         self.launch = subprocess.Popen(
-            ["roslaunch", "--no-summary", "gear_dynamics", "simulate.launch", f"ns:={ns}",
+            ["roslaunch", "--no-summary", launch, f"ns:={ns}",
              "output:=log", "use_sim_time:=false"] + [f"{k}:={v}" for k, v in args.items()],
             env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
         master = xmlrpc.client.ServerProxy(env["ROS_MASTER_URI"])
@@ -117,16 +129,25 @@ def main():
     ap.add_argument("--json", help="also write the figures here")
     ap.add_argument("--before", metavar="DEVEL",
                     help="a copy of another build's devel folder: every case runs with it too, side by side")
+    ap.add_argument("--before-source", metavar="DIR",
+                    help="the source tree of the --before build (default: the one its CMake config names)")
     a = ap.parse_args()
 
     env = dict(os.environ)
     env["ROS_MASTER_URI"] = f"http://localhost:{free_port()}"
     env["ROS_HOME"] = env.get("ROS_HOME", os.path.expanduser("~/.ros"))
+    env["GD_SOURCE"] = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     builds = [("this", env, a.bench)]
     if a.before:
         before = dict(env)
         before["CMAKE_PREFIX_PATH"] = a.before + ":" + env.get("CMAKE_PREFIX_PATH", "")
         before["LD_LIBRARY_PATH"] = a.before + "/lib:" + env.get("LD_LIBRARY_PATH", "")
+        # Its own launch and config files (their keys must match its binaries): the source tree the
+        # build was made from, first on ROS_PACKAGE_PATH.
+        source = a.before_source or source_of(a.before)
+        before["ROS_PACKAGE_PATH"] = source + ":" + env.get("ROS_PACKAGE_PATH", "")
+        before["GD_SOURCE"] = source
+        before["GEAR_DYNAMICS_CONFIG_DIR"] = os.path.join(source, "config")  # for its gear_run
         builds.append(("before", before, os.path.join(a.before, "lib/gear_dynamics/gear_live_bench")))
 
     figures = {"core": [], "fast": [], "realtime": []}

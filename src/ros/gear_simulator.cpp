@@ -312,9 +312,11 @@ bool GearSimulator::wants_center_distance() const {
 }
 
 void GearSimulator::publish(const LiveSample& s) {
-  publish_clock(s.step, s.t, false);
+  // One clock read per publish instant, for the /clock throttle and the burst's age.
+  const auto now = std::chrono::steady_clock::now();
+  publish_clock(now, s.t, false);
   const bool recording = !record_prefix_.empty();
-  if (held_.empty()) held_since_ = std::chrono::steady_clock::now();
+  if (held_.empty()) held_since_ = now;
   if (recording || state_.wanted()) {
     held_.push_back(Held{&state_, make_state(s), {}});
     const GearState& m = held_.back().state;
@@ -333,7 +335,7 @@ void GearSimulator::publish(const LiveSample& s) {
     scalar(phi_, s.phi);
     scalar(center_distance_, s.center_distance);
   }
-  if (held_.size() >= kBurst || std::chrono::steady_clock::now() - held_since_ >= kBurstWall) flush();
+  if (held_.size() >= kBurst || now - held_since_ >= kBurstWall) flush();
 }
 
 void GearSimulator::flush() {
@@ -360,11 +362,10 @@ void GearSimulator::finished(const LiveSample& last) {
 
 void GearSimulator::idle(const LiveSample& last) {
   flush();
-  publish_clock(last.step, last.t, true);  // where time stands, every idle period
+  publish_clock(std::chrono::steady_clock::now(), last.t, true);  // where time stands, every idle period
 }
 
-void GearSimulator::publish_clock(std::int64_t /*step*/, double t, bool always) {
-  const auto now = std::chrono::steady_clock::now();
+void GearSimulator::publish_clock(std::chrono::steady_clock::time_point now, double t, bool always) {
   if (!settings_.publish_clock || (!always && now - last_clock_ < kClockInterval)) return;
   last_clock_ = now;
   rosgraph_msgs::Clock c;

@@ -83,7 +83,8 @@ class GearSimulator : private LiveSink {
   bool wants_center_distance() const override;
   void flush() override;  // publishes the held burst (stepping thread)
   void spectrum(const SpectrumSamples& window) override;  // hands the window to spectrum_
-  void publish_clock(std::int64_t step, double t, bool always);  // else throttled to kClockInterval
+  // /clock = t + 1 s at wall time `now`, if `always` or kClockInterval after the last one.
+  void publish_clock(std::chrono::steady_clock::time_point now, double t, bool always);
 
   // The bag of record:=true (~record_prefix not empty): opened at the start and after a reset that
   // follows t_end, closed at t_end and at shutdown. Under record_mutex_.
