@@ -416,6 +416,7 @@ void LiveSimulation::take_spectrum_sample(std::int64_t n) {
       grid_time(n - static_cast<std::int64_t>(spectrum_samples_.size() - 1) * spectrum_.sample_steps, e.time_step());
   w.sample_rate = spectrum_.sample_rate;
   w.mesh_frequency = gear_.mesh_frequency();
+  w.last = n == end_step_ && !settings_.loop;
   w.samples = &spectrum_samples_;
   sink_.spectrum(w);
 }

@@ -44,7 +44,11 @@ SpectrumPublisher::~SpectrumPublisher() {
 void SpectrumPublisher::submit(const SpectrumSamples& window) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (has_pending_) ++stats_.skipped;
+    if ((busy_ || has_pending_) && !window.last) {
+      ++stats_.skipped;
+      return;
+    }
+    if (has_pending_) ++stats_.skipped;  // replaced by the run's last window
     pending_.meta = window;
     pending_.meta.samples = nullptr;
     window.samples->copy_to(pending_.delta, pending_.force);  // reuses the vectors' capacity
@@ -68,6 +72,7 @@ void SpectrumPublisher::work() {
       if (stop_) return;
       std::swap(w, pending_);
       has_pending_ = false;
+      busy_ = true;
     }
     const double cpu0 = thread_cpu_seconds();
     Spectrum m;
@@ -92,12 +97,14 @@ void SpectrumPublisher::work() {
       m.mesh_force_psd = std::move(f.density);
     } catch (const std::exception& e) {
       ROS_ERROR_THROTTLE(10.0, "spectrum: %s", e.what());
-      continue;
+      m.frequency.clear();
     }
     // No NaN reaches a topic: a diverging run's last window is dropped (the node reports the divergence).
-    if (!finite(m.delta_psd) || !finite(m.mesh_force_psd)) continue;
-    pub_.publish(m);
+    const bool good = !m.frequency.empty() && finite(m.delta_psd) && finite(m.mesh_force_psd);
+    if (good) pub_.publish(m);
     std::lock_guard<std::mutex> lock(mutex_);
+    busy_ = false;
+    if (!good) continue;
     ++stats_.published;
     stats_.cpu_per_update = thread_cpu_seconds() - cpu0;
   }

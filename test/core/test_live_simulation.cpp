@@ -599,7 +599,10 @@ TEST(LiveSimulation, SpectrumWindowsAreTheGridSamples) {
   // Updates at 10, 20, ..., 50 ms: 201 samples at the first (a segment is 20), the full window after.
   ASSERT_EQ(sink.windows.size(), 5u);
   EXPECT_EQ(sink.windows[0].delta.size(), 201u);
-  for (std::size_t k = 0; k < sink.windows.size(); ++k) check(sink.windows[k], kUpdateSteps * (k + 1));
+  for (std::size_t k = 0; k < sink.windows.size(); ++k) {
+    check(sink.windows[k], kUpdateSteps * (k + 1));
+    EXPECT_EQ(sink.windows[k].meta.last, k == 4);  // t_end = 50 ms without loop: the run's last window
+  }
 
   // The mesh force in contact is K g(delta) > 0 under the positive load, and 0 inside the backlash.
   bool contact = false;

@@ -90,6 +90,7 @@ struct SpectrumSamples {
   double window_start = 0.0;    // grid time of the window's first sample [s]
   double sample_rate = 0.0;     // [Hz]
   double mesh_frequency = 0.0;  // f_m [Hz]
+  bool last = false;            // at t_end without loop: the run's final window
   const SampleRing* samples = nullptr;  // valid during the call only
 };
 

@@ -22,7 +22,7 @@ class SpectrumPublisher {
  public:
   struct Stats {
     std::uint64_t published = 0;  // spectra published
-    std::uint64_t skipped = 0;    // windows replaced by a newer one before the worker took them
+    std::uint64_t skipped = 0;    // windows not computed: the worker was busy with an earlier one
     double cpu_per_update = 0.0;  // worker CPU per spectrum, the last one [s]
   };
 
@@ -32,7 +32,10 @@ class SpectrumPublisher {
   SpectrumPublisher(const SpectrumPublisher&) = delete;
   SpectrumPublisher& operator=(const SpectrumPublisher&) = delete;
 
-  // Stepping thread: copies the window for the worker (a window not taken yet is replaced).
+  // Stepping thread: copies the window for the worker, unless the worker is still busy with an
+  // earlier one (then the window is skipped without a copy, which would cost the stepping thread
+  // more than the sampling itself at high update rates); the last window of a run is always taken
+  // (it replaces one still waiting), so a finite run's latched spectrum is that of its end.
   void submit(const SpectrumSamples& window);
   Stats stats() const;
 
@@ -48,7 +51,7 @@ class SpectrumPublisher {
   mutable std::mutex mutex_;
   std::condition_variable wake_;
   Window pending_;  // under mutex_
-  bool has_pending_ = false, stop_ = false;
+  bool has_pending_ = false, busy_ = false, stop_ = false;
   Stats stats_;     // under mutex_
   std::thread worker_;
 };
