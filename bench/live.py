@@ -8,7 +8,10 @@
    subscriber, gear_live_bench subscribe): the node's CPU (all its threads, /proc/PID/task/*/schedstat,
    from ~unpause to final_state), sim s per CPU s, and CPU per published message.
 3. The node at real_time_factor 1 for --wall seconds: CPU % of one core, 1 and 10 kHz, without and
-   with the subscriber.
+   with the subscriber; and (this build) at 1 kHz with the spectrum topic on at 1 Hz.
+The spectrum topic (this build): the core with it on at 1 and 10 Hz (the stepping thread's ns per
+step with the samples and the window copies; the two Welch PSDs per update, timed apart, which the node
+computes on a worker thread).
 The node runs with its defaults otherwise (config/*.yaml: /clock on, throttled to 200 Hz).
 """
 import argparse
@@ -21,6 +24,15 @@ import subprocess
 import sys
 import time
 import xmlrpc.client
+
+
+def source_of(devel):
+    """The gear_dynamics source folder a devel folder was built from (its CMake package config)."""
+    with open(os.path.join(devel, "share/gear_dynamics/cmake/gear_dynamicsConfig.cmake")) as f:
+        for line in f:
+            if line.startswith("set(gear_dynamics_SOURCE_PREFIX "):
+                return os.path.realpath(line.split()[1].rstrip(")"))
+    raise RuntimeError(f"{devel}: no gear_dynamics_SOURCE_PREFIX; pass --before-source")
 
 
 def free_port():
@@ -45,8 +57,11 @@ class Node:
 
     def __init__(self, env, ns, args):
         self.env, self.ns = env, ns
+        # By path: with a --before build two source trees hold the package, and roslaunch refuses
+        # to pick one of two simulate.launch files by package name.
+        launch = os.path.join(env["GD_SOURCE"], "launch", "simulate.launch")
         self.launch = subprocess.Popen(
-            ["roslaunch", "--no-summary", "gear_dynamics", "simulate.launch", f"ns:={ns}",
+            ["roslaunch", "--no-summary", launch, f"ns:={ns}",
              "output:=log", "use_sim_time:=false"] + [f"{k}:={v}" for k, v in args.items()],
             env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
         master = xmlrpc.client.ServerProxy(env["ROS_MASTER_URI"])
@@ -114,16 +129,25 @@ def main():
     ap.add_argument("--json", help="also write the figures here")
     ap.add_argument("--before", metavar="DEVEL",
                     help="a copy of another build's devel folder: every case runs with it too, side by side")
+    ap.add_argument("--before-source", metavar="DIR",
+                    help="the source tree of the --before build (default: the one its CMake config names)")
     a = ap.parse_args()
 
     env = dict(os.environ)
     env["ROS_MASTER_URI"] = f"http://localhost:{free_port()}"
     env["ROS_HOME"] = env.get("ROS_HOME", os.path.expanduser("~/.ros"))
+    env["GD_SOURCE"] = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
     builds = [("this", env, a.bench)]
     if a.before:
         before = dict(env)
         before["CMAKE_PREFIX_PATH"] = a.before + ":" + env.get("CMAKE_PREFIX_PATH", "")
         before["LD_LIBRARY_PATH"] = a.before + "/lib:" + env.get("LD_LIBRARY_PATH", "")
+        # Its own launch and config files (their keys must match its binaries): the source tree the
+        # build was made from, first on ROS_PACKAGE_PATH.
+        source = a.before_source or source_of(a.before)
+        before["ROS_PACKAGE_PATH"] = source + ":" + env.get("ROS_PACKAGE_PATH", "")
+        before["GD_SOURCE"] = source
+        before["GEAR_DYNAMICS_CONFIG_DIR"] = os.path.join(source, "config")  # for its gear_run
         builds.append(("before", before, os.path.join(a.before, "lib/gear_dynamics/gear_live_bench")))
 
     figures = {"core": [], "fast": [], "realtime": []}
@@ -136,6 +160,17 @@ def main():
             figures["core"].append(r)
             print(f"   {name:>6} build {rate:>6} Hz: {r['sim_s_per_cpu_s']:6.1f} sim-s per CPU-s "
                   f"({r['ns_per_step']:.1f} ns per step)")
+    name, e, bench = builds[0]
+    for updates in (1, 10):
+        r = json.loads(subprocess.run([bench, "core", "--rate", "1000", "--t-end", "2", "--repeat", "3",
+                                       "--spectrum", str(updates)],
+                                      check=True, capture_output=True, text=True, env=e).stdout)
+        r["build"], r["spectrum_rate"] = name, updates
+        figures["core"].append(r)
+        print(f"   {name:>6} build   1000 Hz, spectrum at {updates:>2} Hz: {r['sim_s_per_cpu_s']:6.1f} sim-s per CPU-s "
+              f"({r['ns_per_step']:.1f} ns per step, with a copy of the {r['spectrum_window_samples']}-sample window "
+              f"of {r['copy_us_per_spectrum']:.0f} us per update); the two PSDs {r['psd_ms_per_spectrum']:.2f} ms "
+              f"per update")
     if a.core_only:
         return
     print(f"2. The node at real_time_factor 0, t_end {a.t_end:g} s (CPU of all its threads, ~unpause to t_end):")
@@ -186,6 +221,19 @@ def main():
             pct = (c1 - c0) * 1e-9 / (w1 - w0) * 100
             figures["realtime"].append({"build": name, "rate": rate, "subscriber": sub, "cpu_percent": pct})
             print(f"   {name:>6} build  {rate:>6} Hz  subscriber {'yes' if sub else 'no ':<3}  {pct:5.1f} %")
+    name, env, _ = builds[0]
+    k += 1
+    node = Node(env, f"bench{k}", {"publish_rate": 1000, "real_time_factor": 1, "spectrum_rate": 1})
+    try:
+        time.sleep(1.0)
+        c0, w0 = cpu_ns(node.pid), time.monotonic()
+        time.sleep(a.wall)
+        c1, w1 = cpu_ns(node.pid), time.monotonic()
+    finally:
+        node.stop()
+    pct = (c1 - c0) * 1e-9 / (w1 - w0) * 100
+    figures["realtime"].append({"build": name, "rate": 1000, "subscriber": False, "spectrum_rate": 1, "cpu_percent": pct})
+    print(f"   {name:>6} build    1000 Hz  subscriber no   spectrum 1 Hz  {pct:5.1f} %")
     if a.json:
         with open(a.json, "w") as fh:
             json.dump(figures, fh, indent=1)

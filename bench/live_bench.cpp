@@ -1,11 +1,17 @@
 // gear_live_bench: the live node's costs (bench/live prints them).
-//   gear_live_bench core [--rate HZ] [--t-end T] [--repeat K] [--no-center-distance]
+//   gear_live_bench core [--rate HZ] [--t-end T] [--repeat K] [--no-center-distance] [--spectrum HZ]
 //       LiveSimulation (the node's ROS-free core) at real_time_factor 0 with a sink that only
 //       counts: simulated seconds per CPU second of the stepping thread (getrusage), best of K.
+//       --spectrum: the spectrum topic on at HZ updates per simulated second (config/simulator.yaml's
+//       window and sampling otherwise); the sink copies each window as the node's stepping thread
+//       does, then computes the two Welch PSDs as the node's worker does, timed apart (thread CPU):
+//       ns_per_step counts the stepping thread's share only.
 //   gear_live_bench subscribe TOPIC SECONDS
 //       a roscpp subscriber (tcpNoDelay) that counts gear_dynamics/GearState messages on TOPIC for
 //       SECONDS of wall time and prints the count and the sequence gaps (messages roscpp dropped).
 #include <sys/resource.h>
+#include <ctime>
+#include <vector>
 
 #include <cstdio>
 #include <cstdlib>
@@ -16,6 +22,7 @@
 #include "gear_dynamics/GearState.h"
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/config/simulator_settings.hpp"
+#include "gear_dynamics/dynamics/spectrum.hpp"
 #include "gear_dynamics/live/live_simulation.hpp"
 
 namespace gd = gear_dynamics;
@@ -29,10 +36,31 @@ double cpu_seconds() {
          1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
 }
 
+double thread_cpu_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
 struct CountingSink : gd::LiveSink {
   bool center = true;
   long published = 0;
   double checksum = 0.0;
+  gd::WelchOptions welch;
+  long spectra = 0;
+  double copy_cpu = 0.0, psd_cpu = 0.0;  // [s]
+  std::vector<double> delta, force;
+  void spectrum(const gd::SpectrumSamples& w) override {
+    const double c0 = thread_cpu_seconds();
+    w.samples->copy_to(delta, force);  // what GearSimulator's stepping thread does
+    const double c1 = thread_cpu_seconds();
+    const gd::Psd d = gd::welch_psd(delta, w.sample_rate, welch);  // what its worker thread does
+    const gd::Psd f = gd::welch_psd(force, w.sample_rate, welch);
+    checksum += d.density[1] + f.density[1];
+    copy_cpu += c1 - c0;
+    psd_cpu += thread_cpu_seconds() - c1;
+    ++spectra;
+  }
   void publish(const gd::LiveSample& s) override {
     ++published;
     checksum += s.delta + s.center_distance;
@@ -43,7 +71,7 @@ struct CountingSink : gd::LiveSink {
 };
 
 int core(int argc, char** argv) {
-  double rate = 1000.0, t_end = 2.0;
+  double rate = 1000.0, t_end = 2.0, spectrum = 0.0;
   int repeat = 3;
   bool center = true;
   for (int i = 2; i < argc; ++i) {
@@ -52,6 +80,7 @@ int core(int argc, char** argv) {
     else if (a == "--t-end" && i + 1 < argc) t_end = std::atof(argv[++i]);
     else if (a == "--repeat" && i + 1 < argc) repeat = std::atoi(argv[++i]);
     else if (a == "--no-center-distance") center = false;
+    else if (a == "--spectrum" && i + 1 < argc) spectrum = std::atof(argv[++i]);
     else { std::fprintf(stderr, "gear_live_bench core: unknown option %s\n", a.c_str()); return 2; }
   }
   const std::string dir = GEAR_DYNAMICS_CONFIG_DIR;
@@ -63,23 +92,33 @@ int core(int argc, char** argv) {
   settings.publish_rate = rate;
   settings.t_end = t_end;
   settings.paused = false;
-  double best = 1e300;
-  long published = 0;
+  settings.spectrum_rate = spectrum;
+  const gd::SpectrumSampling sampling = gd::spectrum_sampling(settings, model.run.time_step);
+  double best = 1e300, copy_us = 0.0, psd_ms = 0.0;
+  long published = 0, spectra = 0;
   double checksum = 0.0;
   for (int k = 0; k < repeat; ++k) {
     CountingSink sink;
     sink.center = center;
+    sink.welch = gd::WelchOptions{static_cast<std::size_t>(sampling.segment_samples), sampling.overlap};
     gd::LiveSimulation sim(model, settings, sink);
     const double c0 = cpu_seconds();
     while (sim.iterate().running) {}
-    const double c = cpu_seconds() - c0;
+    const double c = cpu_seconds() - c0 - sink.psd_cpu;  // the stepping thread's share
     if (c < best) best = c;
     published = sink.published;
     checksum = sink.checksum;
+    spectra = sink.spectra;
+    if (spectra > 0) {
+      copy_us = sink.copy_cpu / static_cast<double>(spectra) * 1e6;
+      psd_ms = sink.psd_cpu / static_cast<double>(spectra) * 1e3;
+    }
   }
   std::printf("{\"rate\": %g, \"t_end\": %g, \"cpu_s\": %.6f, \"sim_s_per_cpu_s\": %.3f, "
-              "\"ns_per_step\": %.2f, \"published\": %ld, \"checksum\": %.17g}\n",
-              rate, t_end, best, t_end / best, best / (t_end / model.run.time_step) * 1e9, published, checksum);
+              "\"ns_per_step\": %.2f, \"published\": %ld, \"checksum\": %.17g, \"spectra\": %ld, "
+              "\"spectrum_window_samples\": %lld, \"copy_us_per_spectrum\": %.1f, \"psd_ms_per_spectrum\": %.2f}\n",
+              rate, t_end, best, t_end / best, best / (t_end / model.run.time_step) * 1e9, published, checksum,
+              spectra, static_cast<long long>(sampling.window_samples), copy_us, psd_ms);
   return 0;
 }
 

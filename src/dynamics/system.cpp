@@ -8,12 +8,6 @@
 
 namespace gear_dynamics {
 
-double mesh_force(const GearPair& gear, double stiffness, double delta, double delta_dot) {
-  const double b = gear.in.backlash;
-  const double g = delta - kernel::clamp(delta, b);
-  return stiffness * g + (gear.damping_coefficient * std::abs(g)) * delta_dot;
-}
-
 GearLanes::GearLanes(const std::vector<GearLaneSpec>& lanes, double time_step) : h_(time_step) {
   if (lanes.empty()) throw std::invalid_argument("GearLanes: needs at least one lane");
   const int n = static_cast<int>(lanes.size());

@@ -57,6 +57,17 @@ std::string to_string(LoadInput mode) {
   }
 }
 
+void SampleRing::copy_to(std::vector<double>& delta, std::vector<double>& force) const {
+  const std::size_t first = size_ < delta_.size() ? 0 : next_;  // the oldest sample
+  delta.resize(size_);
+  force.resize(size_);
+  const std::size_t tail = std::min(size_, delta_.size() - first);
+  std::copy_n(delta_.begin() + first, tail, delta.begin());
+  std::copy_n(force_.begin() + first, tail, force.begin());
+  std::copy_n(delta_.begin(), size_ - tail, delta.begin() + tail);
+  std::copy_n(force_.begin(), size_ - tail, force.begin() + tail);
+}
+
 const LiveClock& LiveSimulation::default_clock() {
   static const SteadyLiveClock clock;
   return clock;
@@ -70,12 +81,15 @@ LiveSimulation::LiveSimulation(const ModelConfig& config, const SimulatorSetting
       clock_(clock),
       load_input_(load_input_from_string(settings.load_input)),
       end_step_(config.run.steps_for(settings.t_end)),
-      realization_(derive(config.gear), config.run.time_step, config.initial, lane_of(config, settings, load_input_),
+      spectrum_(spectrum_sampling(settings, config.run.time_step)),
+      gear_(derive(config.gear)),
+      realization_(gear_, config.run.time_step, config.initial, lane_of(config, settings, load_input_),
                    config.seed),
       real_time_factor_(settings.real_time_factor),
       publish_rate_(settings.publish_rate),
       period_(publish_period_steps(publish_rate_, config.run.time_step)),
       window_(make_window()),
+      spectrum_samples_(spectrum_.enabled() ? static_cast<std::size_t>(spectrum_.window_samples) : 0),
       paused_(settings.paused) {
   restart();
   local_.state = state_name();
@@ -337,6 +351,7 @@ void LiveSimulation::advance() {
       if (load_pending_.load(std::memory_order_acquire)) take_load_command();
       realization_.step();
       n = realization_.step_index();
+      if (n == next_sample_) take_spectrum_sample(n);
       const double d = realization_.delta(), v = realization_.velocity();
       hi_d = std::max(hi_d, d);
       lo_d = std::max(lo_d, -d);
@@ -387,6 +402,25 @@ LiveSample LiveSimulation::sample() const {
   return s;
 }
 
+void LiveSimulation::take_spectrum_sample(std::int64_t n) {
+  const Realization& e = realization_;
+  spectrum_samples_.push(e.delta(), mesh_force(gear_, e.mesh().stiffness(e.time()), e.delta(), e.velocity()));
+  next_sample_ += spectrum_.sample_steps;
+  if (n != next_update_) return;
+  next_update_ += spectrum_.update_steps;
+  if (spectrum_samples_.size() < static_cast<std::size_t>(spectrum_.segment_samples)) return;
+  SpectrumSamples w;
+  w.step = n;
+  w.t = grid_time(n, e.time_step());
+  w.window_start =
+      grid_time(n - static_cast<std::int64_t>(spectrum_samples_.size() - 1) * spectrum_.sample_steps, e.time_step());
+  w.sample_rate = spectrum_.sample_rate;
+  w.mesh_frequency = gear_.mesh_frequency();
+  w.last = n == end_step_ && !settings_.loop;
+  w.samples = &spectrum_samples_;
+  sink_.spectrum(w);
+}
+
 void LiveSimulation::publish() {
   LiveSample s = sample();
   if (sink_.wants_center_distance()) s.center_distance = window_.center_distance(0);
@@ -428,6 +462,11 @@ void LiveSimulation::restart() {
   divergence_.clear();
   anchored_ = false;
   load_applied_.reset();
+  // The spectrum's samples from t = 0 on: the first one now, at n = 0.
+  constexpr std::int64_t kNever = std::numeric_limits<std::int64_t>::max();
+  spectrum_samples_.clear();
+  next_sample_ = next_update_ = spectrum_.enabled() ? 0 : kNever;
+  if (spectrum_.enabled()) take_spectrum_sample(0);
   publish_run_info();
   publish();
 }

@@ -88,6 +88,8 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
   private_nh_.param<std::string>("record_prefix", record_prefix_, "");
   record_open();  // throws ConfigError when the bag cannot be opened
 
+  const SpectrumSampling spectrum = spectrum_sampling(settings_, config_.run.time_step);
+  if (spectrum.enabled()) spectrum_ = std::make_unique<SpectrumPublisher>(nh_, spectrum);
   held_.reserve(5 * kBurst + 5);
   // Publishes t = 0 and the run info at once.
   sim_.emplace(config_, settings_, static_cast<LiveSink&>(*this));
@@ -126,6 +128,17 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
            seconds(config_.run.time_step).c_str(), end.c_str(), static_cast<long long>(period),
            1.0 / (static_cast<double>(period) * config_.run.time_step), settings_.real_time_factor,
            settings_.paused ? ", paused" : "");
+  if (spectrum.enabled()) {
+    const double fs = spectrum.sample_rate;
+    ROS_INFO("gear_simulator: spectrum every %g s of simulated time over the last %lld samples (%g s) of delta and "
+             "the mesh force, taken every %lld steps (%g Hz, Nyquist %g Hz); Welch: Hann segments of %lld samples "
+             "(resolution %g Hz), overlap %g; f_m = %g Hz",
+             static_cast<double>(spectrum.update_steps) * config_.run.time_step,
+             static_cast<long long>(spectrum.window_samples), static_cast<double>(spectrum.window_samples) / fs,
+             static_cast<long long>(spectrum.sample_steps), fs, 0.5 * fs,
+             static_cast<long long>(spectrum.segment_samples), fs / static_cast<double>(spectrum.segment_samples),
+             spectrum.overlap, derive(config_.gear).mesh_frequency());
+  }
   if (settings_.load_input != "sde")
     ROS_INFO("gear_simulator: load input '%s' from %s (std_msgs/Float64, m/s^2), applied at the next step",
              settings_.load_input.c_str(), load_sub_.getTopic().c_str());
@@ -271,6 +284,12 @@ void GearSimulator::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) 
   stat.add("lambda [m/s^3]", s.drift);
   stat.add("load input", settings_.load_input);
   stat.add("load commands applied", s.load_commands);
+  if (spectrum_) {
+    const SpectrumPublisher::Stats st = spectrum_->stats();
+    stat.add("spectrum: published", st.published);
+    stat.add("spectrum: windows skipped (worker busy)", st.skipped);
+    stat.add("spectrum: worker CPU per spectrum [ms]", 1e3 * st.cpu_per_update);
+  }
   if (!record_prefix_.empty()) {
     std::lock_guard<std::mutex> lock(record_mutex_);
     const std::uint64_t written = recorded_ + (recorder_ ? recorder_->written() : 0);
@@ -293,9 +312,11 @@ bool GearSimulator::wants_center_distance() const {
 }
 
 void GearSimulator::publish(const LiveSample& s) {
-  publish_clock(s.step, s.t, false);
+  // One clock read per publish instant, for the /clock throttle and the burst's age.
+  const auto now = std::chrono::steady_clock::now();
+  publish_clock(now, s.t, false);
   const bool recording = !record_prefix_.empty();
-  if (held_.empty()) held_since_ = std::chrono::steady_clock::now();
+  if (held_.empty()) held_since_ = now;
   if (recording || state_.wanted()) {
     held_.push_back(Held{&state_, make_state(s), {}});
     const GearState& m = held_.back().state;
@@ -314,7 +335,7 @@ void GearSimulator::publish(const LiveSample& s) {
     scalar(phi_, s.phi);
     scalar(center_distance_, s.center_distance);
   }
-  if (held_.size() >= kBurst || std::chrono::steady_clock::now() - held_since_ >= kBurstWall) flush();
+  if (held_.size() >= kBurst || now - held_since_ >= kBurstWall) flush();
 }
 
 void GearSimulator::flush() {
@@ -327,6 +348,10 @@ void GearSimulator::flush() {
   held_.clear();  // keeps the capacity
 }
 
+void GearSimulator::spectrum(const SpectrumSamples& window) {
+  if (spectrum_) spectrum_->submit(window);
+}
+
 void GearSimulator::finished(const LiveSample& last) {
   flush();  // the run's states before its final state
   const GearState m = make_state(last);
@@ -337,11 +362,10 @@ void GearSimulator::finished(const LiveSample& last) {
 
 void GearSimulator::idle(const LiveSample& last) {
   flush();
-  publish_clock(last.step, last.t, true);  // where time stands, every idle period
+  publish_clock(std::chrono::steady_clock::now(), last.t, true);  // where time stands, every idle period
 }
 
-void GearSimulator::publish_clock(std::int64_t /*step*/, double t, bool always) {
-  const auto now = std::chrono::steady_clock::now();
+void GearSimulator::publish_clock(std::chrono::steady_clock::time_point now, double t, bool always) {
   if (!settings_.publish_clock || (!always && now - last_clock_ < kClockInterval)) return;
   last_clock_ = now;
   rosgraph_msgs::Clock c;

@@ -519,3 +519,115 @@ TEST(LoadInput, Names) {
   EXPECT_THROW(gd::load_input_from_string("extern"), gd::ConfigError);
   EXPECT_EQ(gd::to_string(gd::LoadInput::ExternalPlusNoise), "external_plus_noise");
 }
+
+// ---- the spectrum topic's samples (doc/gear_simulator.md §3) ----
+
+TEST(SampleRing, OldestFirstAcrossTheWrap) {
+  gd::SampleRing ring(5);
+  std::vector<double> d, f;
+  ring.copy_to(d, f);
+  EXPECT_TRUE(d.empty());
+  for (int i = 0; i < 3; ++i) ring.push(i, 10 * i);
+  ring.copy_to(d, f);
+  EXPECT_EQ(d, (std::vector<double>{0, 1, 2}));
+  EXPECT_EQ(f, (std::vector<double>{0, 10, 20}));
+  for (int i = 3; i < 12; ++i) ring.push(i, 10 * i);  // wrapped: the last 5
+  ring.copy_to(d, f);
+  EXPECT_EQ(d, (std::vector<double>{7, 8, 9, 10, 11}));
+  EXPECT_EQ(f, (std::vector<double>{70, 80, 90, 100, 110}));
+  ring.clear();
+  ring.copy_to(d, f);
+  EXPECT_TRUE(d.empty());
+}
+
+namespace {
+
+struct SpectrumSink : RecordingSink {
+  struct Window {
+    gd::SpectrumSamples meta;
+    std::vector<double> delta, force;
+  };
+  std::vector<Window> windows;
+  void spectrum(const gd::SpectrumSamples& w) override {
+    windows.push_back(Window{w, {}, {}});
+    w.samples->copy_to(windows.back().delta, windows.back().force);
+  }
+};
+
+}  // namespace
+
+// The windows are the grid states every sample period (not the published ones: the publish period
+// here, 3333 steps, is no multiple of the 50-step sample period), delta and the mesh force of the
+// same realization stepped by an Ensemble, at every update instant (every 10000 steps) once a segment
+// is full, partial until the window is; a reset starts the window again from t = 0.
+TEST(LiveSimulation, SpectrumWindowsAreTheGridSamples) {
+  const Loaded l = load("gear_pair: {friction_coefficient: 0.03}\n"
+                        "simulator: {real_time_factor: 0.0, t_end: 0.05, publish_rate: 300.0, spectrum_rate: 100.0,"
+                        " spectrum_sample_rate: 20000.0, spectrum_window: 0.012, spectrum_segment: 0.001}");
+  constexpr std::int64_t kSampleSteps = 50, kUpdateSteps = 10000;
+  constexpr std::size_t kWindow = 240;
+  const gd::GearPair g = gd::derive(l.model.gear);
+  gd::Ensemble ref(g, kH, l.model.initial, {gd::stochastic_lane(l.model, l.model.friction_coefficient, 0)},
+                   l.model.seed);
+  std::vector<double> delta, force;  // every sample of the reference, from n = 0
+  while (ref.step_index() <= 50000) {
+    if (ref.step_index() % kSampleSteps == 0) {
+      delta.push_back(ref.delta()[0]);
+      force.push_back(gd::mesh_force(g, ref.mesh().stiffness(ref.time()), ref.delta()[0], ref.velocity()[0]));
+    }
+    ref.step();
+  }
+
+  SpectrumSink sink;
+  gd::LiveSimulation sim(l.model, l.sim, sink);
+  run_until_stopped(sim);
+  ASSERT_EQ(sim.realization().step_index(), 50000);
+  const auto check = [&](const SpectrumSink::Window& w, std::int64_t step) {
+    EXPECT_EQ(w.meta.step, step);
+    EXPECT_EQ(w.meta.t, gd::grid_time(step, kH));
+    EXPECT_DOUBLE_EQ(w.meta.sample_rate, 20000.0);
+    EXPECT_DOUBLE_EQ(w.meta.mesh_frequency, 1000.0 / 60.0 * 20.0);  // 1000 rpm, 20 teeth
+    const std::size_t last = static_cast<std::size_t>(step / kSampleSteps);
+    const std::size_t size = std::min(kWindow, last + 1);
+    ASSERT_EQ(w.delta.size(), size);
+    EXPECT_EQ(w.meta.window_start, gd::grid_time(step - static_cast<std::int64_t>(size - 1) * kSampleSteps, kH));
+    for (std::size_t i = 0; i < size; ++i) {
+      EXPECT_EQ(w.delta[i], delta[last + 1 - size + i]) << "step " << step << ", sample " << i;
+      EXPECT_EQ(w.force[i], force[last + 1 - size + i]) << "step " << step << ", sample " << i;
+    }
+  };
+  // Updates at 10, 20, ..., 50 ms: 201 samples at the first (a segment is 20), the full window after.
+  ASSERT_EQ(sink.windows.size(), 5u);
+  EXPECT_EQ(sink.windows[0].delta.size(), 201u);
+  for (std::size_t k = 0; k < sink.windows.size(); ++k) {
+    check(sink.windows[k], kUpdateSteps * (k + 1));
+    EXPECT_EQ(sink.windows[k].meta.last, k == 4);  // t_end = 50 ms without loop: the run's last window
+  }
+
+  // The mesh force in contact is K g(delta) > 0 under the positive load, and 0 inside the backlash.
+  bool contact = false;
+  for (std::size_t i = 0; i < delta.size(); ++i) {
+    if (std::abs(delta[i]) <= l.model.gear.backlash) {
+      EXPECT_EQ(force[i], 0.0);
+    }
+    contact = contact || force[i] != 0.0;
+  }
+  EXPECT_TRUE(contact);
+
+  Request r;
+  r.reset = true;
+  sim.post(r);
+  sink.windows.clear();
+  for (int i = 0; i < 4; ++i) sim.iterate();  // reset, then to 4 x 3333 steps: the update at 10 ms
+  ASSERT_EQ(sink.windows.size(), 1u);
+  check(sink.windows[0], 10000);
+}
+
+TEST(LiveSimulation, NoSpectrumByDefault) {
+  const Loaded l = load("simulator: {real_time_factor: 0.0, t_end: 0.003}");
+  EXPECT_EQ(l.sim.spectrum_rate, 0.0);
+  SpectrumSink sink;
+  gd::LiveSimulation sim(l.model, l.sim, sink);
+  run_until_stopped(sim);
+  EXPECT_TRUE(sink.windows.empty());
+}

@@ -98,6 +98,61 @@ TEST(SimulatorSettings, ContradictionsAndTypos) {
   EXPECT_THROW(gd::parse_simulator_settings(YAML::Load("{gear_pair: {}}"), kStep), gd::ConfigError);
 }
 
+TEST(SimulatorSettings, SpectrumOffByDefaultAndCheckedWhenOn) {
+  const gd::SimulatorSettings s = gd::parse_simulator_settings(shipped(), kStep);
+  EXPECT_EQ(s.spectrum_rate, 0.0);
+  EXPECT_FALSE(gd::spectrum_sampling(s, kStep).enabled());
+  // Ranges hold whether the topic is on or not.
+  EXPECT_HAS(error_with("spectrum_rate", "-1"), "simulator.spectrum_rate = -1 is out of range; allowed [0, 100]");
+  EXPECT_HAS(error_with("spectrum_overlap", "0.96"), "simulator.spectrum_overlap = 0.96 is out of range; allowed [0, 0.95]");
+  EXPECT_HAS(error_with("spectrum_window", "0"), "simulator.spectrum_window = 0 is out of range; allowed (0, 1000]");
+  EXPECT_HAS(error_with("spectrum_segment", ""), "simulator.spectrum_segment is missing");
+  // Against the grid and the window only when it is on (a coarse grid need not fit an unused topic).
+  EXPECT_EQ(error_with("spectrum_sample_rate", "200000", 1e-5), "");
+  const auto with_spectrum = [](const std::string& key, const std::string& value, double time_step = kStep) {
+    YAML::Node root = shipped();
+    root["simulator"]["spectrum_rate"] = 1.0;
+    root["simulator"][key] = YAML::Load(value);
+    try {
+      gd::parse_simulator_settings(root, time_step);
+      return std::string();
+    } catch (const gd::ConfigError& e) {
+      return std::string(e.what());
+    }
+  };
+  EXPECT_EQ(with_spectrum("spectrum_overlap", "0.75"), "");
+  EXPECT_HAS(with_spectrum("spectrum_sample_rate", "200000", 1e-5),
+             "simulator.spectrum_sample_rate = 200000 is out of range; allowed [1, 100000] Hz (at most 1/time_step");
+  EXPECT_HAS(with_spectrum("spectrum_window", "20"),
+             "simulator.spectrum_window = 20 s holds 2000000 samples at the sample rate 100000 Hz; allowed at most 1000000");
+  EXPECT_HAS(with_spectrum("spectrum_segment", "2"),
+             "simulator.spectrum_segment = 2 s holds 200000 samples at the sample rate 100000 Hz; allowed [8, 100000] samples");
+  EXPECT_HAS(with_spectrum("spectrum_segment", "0.00005"), "holds 5 samples");
+}
+
+TEST(SimulatorSettings, SpectrumSamplingOnTheGrid) {
+  gd::SimulatorSettings s;
+  s.spectrum_rate = 3.0;
+  s.spectrum_sample_rate = 30000.0;  // every round(33.3) = 33 steps: 30303.03 Hz
+  s.spectrum_window = 0.5;
+  s.spectrum_segment = 0.09;
+  const gd::SpectrumSampling p = gd::spectrum_sampling(s, kStep);
+  EXPECT_TRUE(p.enabled());
+  EXPECT_EQ(p.sample_steps, 33);
+  EXPECT_DOUBLE_EQ(p.sample_rate, 1.0 / 33e-6);
+  EXPECT_EQ(p.update_steps, 33 * 10101);  // round(30303.03 / 3) sample periods
+  EXPECT_EQ(p.window_samples, 15152);
+  EXPECT_EQ(p.segment_samples, 2727);
+  // The defaults: every 10 steps, 30 mesh periods of 1000 rpm per segment (9000 samples).
+  gd::SimulatorSettings d;
+  d.spectrum_rate = 1.0;
+  const gd::SpectrumSampling q = gd::spectrum_sampling(d, kStep);
+  EXPECT_EQ(q.sample_steps, 10);
+  EXPECT_EQ(q.update_steps, 1000000);
+  EXPECT_EQ(q.window_samples, 100000);
+  EXPECT_EQ(q.segment_samples, 9000);
+}
+
 TEST(SimulatorSettings, PublishPeriodRoundsToWholeSteps) {
   EXPECT_EQ(gd::publish_period_steps(1000.0, 1e-6), 1000);
   EXPECT_EQ(gd::publish_period_steps(10000.0, 1e-6), 100);

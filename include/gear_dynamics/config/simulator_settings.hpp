@@ -17,6 +17,9 @@ constexpr double kMaxRealTimeFactor = 1000.0;
 // second to integrate and the node would answer that slowly.
 constexpr double kMinPublishRate = 1.0;     // [Hz]
 constexpr double kMaxPublishRate = 1.0e6;   // [Hz], and at most one message per grid step
+// The spectrum topic's trailing window holds at most this many samples of each series (16 MB for
+// delta and the force): 10 s at the default 100 kHz.
+constexpr double kMaxSpectrumSamples = 1.0e6;
 
 struct SimulatorSettings {
   bool deterministic = false;     // the deterministic load S1 instead of a stochastic realization
@@ -31,7 +34,25 @@ struct SimulatorSettings {
   // Where Phi comes from: "sde" (load.yaml's SDE), "external" (the load_command topic, held), or
   // "external_plus_noise" (the command plus the SDE's increments); see gear_dynamics/live/.
   std::string load_input = "sde";
+  // The optional topic `spectrum` (doc/gear_simulator.md §3): Welch PSDs of delta and the mesh force
+  // over a trailing window of samples taken on the integration grid.
+  double spectrum_rate = 0.0;            // updates per simulated second; 0 = no spectrum topic
+  double spectrum_window = 1.0;          // trailing window [s]
+  double spectrum_sample_rate = 1.0e5;   // [Hz]: every round(1/(rate h)) grid steps
+  double spectrum_segment = 0.09;        // Welch segment [s]; 0.09 = 30 mesh periods at 1000 rpm
+  double spectrum_overlap = 0.5;         // fraction of a segment shared with the next
 };
+
+// The spectrum topic's settings on the grid of step h.
+struct SpectrumSampling {
+  std::int64_t sample_steps = 0;  // grid steps between two samples (D)
+  std::int64_t update_steps = 0;  // grid steps between two updates, a multiple of D; 0 = no topic
+  std::int64_t window_samples = 0, segment_samples = 0;
+  double sample_rate = 0.0;       // effective: 1 / (D h) [Hz]
+  double overlap = 0.0;
+  bool enabled() const { return update_steps > 0; }
+};
+SpectrumSampling spectrum_sampling(const SimulatorSettings& settings, double time_step);
 
 // The declaration of the `simulator` section.
 const Section<SimulatorSettings>& simulator_section();

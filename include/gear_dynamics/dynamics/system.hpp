@@ -96,8 +96,7 @@ class GearLanes : public LaneSystem {
   std::int64_t n_ = 0;
 };
 
-// Mesh force F_c = K g(delta) + alpha |g(delta)| delta_dot [N] (doc/model.md §2).
-double mesh_force(const GearPair& gear, double stiffness, double delta, double delta_dot);
+// mesh_force (the quantity of the force spectra) is in gear_dynamics/model/gear_pair.hpp.
 
 // --- analytic reference systems (classical RK4 on the grid) ---
 

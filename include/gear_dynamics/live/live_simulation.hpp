@@ -18,6 +18,7 @@
 #include <optional>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/config/simulator_settings.hpp"
@@ -60,6 +61,39 @@ struct LiveRunInfo {
 
 enum class LiveLogLevel { Debug, Info, Warn, Error };
 
+// The spectrum topic's trailing window: delta and the mesh force, the last `capacity` samples, in a
+// ring. The stepping loop only stores two doubles per sample; the PSD is the sink's business.
+class SampleRing {
+ public:
+  explicit SampleRing(std::size_t capacity = 0) : delta_(capacity), force_(capacity) {}
+  void clear() { next_ = size_ = 0; }
+  void push(double delta, double force) {
+    delta_[next_] = delta;
+    force_[next_] = force;
+    if (++next_ == delta_.size()) next_ = 0;
+    if (size_ < delta_.size()) ++size_;
+  }
+  std::size_t size() const { return size_; }
+  std::size_t capacity() const { return delta_.size(); }
+  // The samples, oldest first (resizes the vectors to size()).
+  void copy_to(std::vector<double>& delta, std::vector<double>& force) const;
+
+ private:
+  std::vector<double> delta_, force_;
+  std::size_t next_ = 0, size_ = 0;  // where the next sample goes; samples held
+};
+
+// At a spectrum update instant: the trailing window, its last sample at grid step `step`.
+struct SpectrumSamples {
+  std::int64_t step = 0;
+  double t = 0.0;               // grid_time(step, h) [s]
+  double window_start = 0.0;    // grid time of the window's first sample [s]
+  double sample_rate = 0.0;     // [Hz]
+  double mesh_frequency = 0.0;  // f_m [Hz]
+  bool last = false;            // at t_end without loop: the run's final window
+  const SampleRing* samples = nullptr;  // valid during the call only
+};
+
 // Where the simulation reports. Called on the stepping thread (or the thread calling iterate()).
 class LiveSink {
  public:
@@ -79,6 +113,9 @@ class LiveSink {
   virtual void flush() {}
   // Whether publish() needs the center distance (it costs a window query).
   virtual bool wants_center_distance() const { return true; }
+  // With simulator.spectrum_rate > 0: at every spectrum update instant (a whole number of sample
+  // periods) once the window holds at least one Welch segment. The sink copies what it needs.
+  virtual void spectrum(const SpectrumSamples& /*window*/) {}
 };
 
 // Wall time for pacing; tests inject a fake one.
@@ -193,6 +230,7 @@ class LiveSimulation {
   bool running() const { return !paused_ && !finished_ && !diverged_; }
   std::string state_name() const;
   WindowRange make_window() const;
+  void take_spectrum_sample(std::int64_t n);
   LiveSample sample() const;
   void log(LiveLogLevel level, const std::string& line) { sink_.log(level, line); }
   void loop();
@@ -204,12 +242,16 @@ class LiveSimulation {
   const LiveClock& clock_;
   const LoadInput load_input_;
   const std::int64_t end_step_;  // 0 = run on forever
+  const SpectrumSampling spectrum_;
+  const GearPair gear_;  // for the mesh force and f_m of the spectrum samples
 
   // Owned by the stepping loop.
   Realization realization_;
   double real_time_factor_, publish_rate_;
   std::int64_t period_;  // grid steps per publish period
   WindowRange window_;   // trailing-window ranges for the center distance d(t)
+  SampleRing spectrum_samples_;
+  std::int64_t next_sample_, next_update_;  // grid steps; never reached without the spectrum topic
   bool paused_, finished_ = false, diverged_ = false;
   std::string divergence_;
   bool anchored_ = false;  // pacing restarts from (anchor_wall_, anchor_step_) when false

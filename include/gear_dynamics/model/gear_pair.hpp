@@ -2,6 +2,9 @@
 // SI units throughout (m, kg, s, N, rad). No ROS.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
+
 namespace gear_dynamics {
 
 // What a user sets (paper Table 1 plus doc/model.md's assumed values).
@@ -51,12 +54,23 @@ struct GearPair {
   double max_contact_frequency(double mu) const;
   // Friction factor f(phi) at local mesh phase phi in [0, phi_n].
   double friction_factor(double phi) const { return c0 + c1 * (x_b + base_radius1 * phi); }
+  // Mesh frequency f_m = Omega / phi_n: tooth pairs per second [Hz].
+  double mesh_frequency() const { return in.pinion_speed / mesh_period_angle; }
 };
 
 // The first time t >= 0 at which the mesh phase (phi0 + Omega t mod phi_n) is 0, i.e. a mesh period
 // starts: 0 if phi0 = 0, else (phi_n - phi0) / Omega [s]. The Poincare sections sample there, then
 // every mesh period phi_n / Omega (doc/nonlinear-dynamics.md §3).
 double first_mesh_period_start(const GearPair& gear);
+
+// Mesh force F_c = K g(delta) + alpha |g(delta)| delta_dot [N] (doc/model.md §2, without the friction
+// factor), g(delta) = delta - clamp(delta, -b, b) the tooth deflection beyond the backlash; the
+// quantity whose spectrum gear_analyze and the live node's spectrum topic show.
+inline double mesh_force(const GearPair& gear, double stiffness, double delta, double delta_dot) {
+  const double b = gear.in.backlash;
+  const double g = delta - std::min(std::max(delta, -b), b);  // as kernel::clamp
+  return stiffness * g + (gear.damping_coefficient * std::abs(g)) * delta_dot;
+}
 
 // Computes every derived quantity by doc/model.md's formulas. Does not validate (see config.hpp).
 GearPair derive(const GearInputs& in);

@@ -26,6 +26,7 @@
 #include "gear_dynamics/config/simulator_settings.hpp"
 #include "gear_dynamics/live/live_simulation.hpp"
 #include "gear_dynamics/ros/live_recorder.hpp"
+#include "gear_dynamics/ros/spectrum_publisher.hpp"
 
 namespace gear_dynamics {
 
@@ -81,7 +82,9 @@ class GearSimulator : private LiveSink {
   void finished(const LiveSample& last) override;
   bool wants_center_distance() const override;
   void flush() override;  // publishes the held burst (stepping thread)
-  void publish_clock(std::int64_t step, double t, bool always);  // else throttled to kClockInterval
+  void spectrum(const SpectrumSamples& window) override;  // hands the window to spectrum_
+  // /clock = t + 1 s at wall time `now`, if `always` or kClockInterval after the last one.
+  void publish_clock(std::chrono::steady_clock::time_point now, double t, bool always);
 
   // The bag of record:=true (~record_prefix not empty): opened at the start and after a reset that
   // follows t_end, closed at t_end and at shutdown. Under record_mutex_.
@@ -140,6 +143,7 @@ class GearSimulator : private LiveSink {
   diagnostic_updater::Updater updater_;
   ros::WallTimer diagnostics_timer_;
 
+  std::unique_ptr<SpectrumPublisher> spectrum_;  // with simulator.spectrum_rate > 0
   std::optional<LiveSimulation> sim_;  // last: publishes through the members above
 };
 
