@@ -312,13 +312,6 @@ def poincare_figure(folder, out):
     out(fig, "poincare.png")
 
 
-def over_time_figures(folder, out):
-    safety_figure(folder, out)
-    first_passage_figure(folder, out)
-    spectrum_figure(folder, out)
-    poincare_figure(folder, out)
-
-
 def axis_columns(points):
     """The axis columns of points.csv: every column between `point` and `R`."""
     keys = list(points[0].keys())
@@ -396,7 +389,8 @@ def main():
     study = os.path.exists(points) and len(axis_columns(read(args.folder, "points.csv"))) > 1
     if study:  # a study with more axes than mu: its figures, not the paper's
         draw_in_parallel([lambda: study_figures(args.folder, out), lambda: safety_figure(args.folder, out),
-                          lambda: first_passage_figure(args.folder, out), lambda: spectrum_figure(args.folder, out)])
+                          lambda: first_passage_figure(args.folder, out), lambda: spectrum_figure(args.folder, out),
+                          lambda: poincare_figure(args.folder, out)])
         print("plot_report: study figures written to %s" % args.folder)
         return
     # Dearest first (the series and the spectrum band read the largest CSV files), so that dealing
@@ -412,6 +406,7 @@ def main():
         lambda: safety_figure(args.folder, out),
         lambda: center_distance_figures(args.folder, out),
         lambda: first_passage_figure(args.folder, out),
+        lambda: poincare_figure(args.folder, out),
     ])
     print("plot_report: figures written to %s" % args.folder)
 
