@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Draws the figures of a gear_aggregator report (the paper's Figs. 5-12) from its CSV files.
 
-usage: plot_report.py REPORT_FOLDER [--mu 0.04]
+usage: plot_report.py REPORT_FOLDER [--mu 0.04] [--wait]
 
 For a study with more axes than mu (points.csv with more than one axis column, doc/studies.md) it
 draws the study's figures instead: axis_<key>.png per swept axis and, for a 2-D grid,
@@ -10,6 +10,9 @@ mu or point: safety_over_time.png, first_passage.png, spectrum_band.png and poin
 
 Every number comes from the CSV files the aggregator wrote (paper units); this script only draws.
 --mu selects the friction coefficient of the series and joint-PDF figures (the paper's 0.04).
+--wait reads a line from stdin before reading the folder (end of input: exit 0, nothing drawn):
+gear_aggregator starts the script early, so that Python and matplotlib are loaded when its CSV
+files are written.
 """
 import argparse
 import csv
@@ -388,7 +391,14 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("folder")
     parser.add_argument("--mu", type=float, default=0.04, help="mu of Figs. 5-7 and 10 (default 0.04)")
+    parser.add_argument("--wait", action="store_true", help="draw only after a line on stdin (end of input: exit 0)")
     args = parser.parse_args()
+    if args.wait:
+        try:
+            if not sys.stdin.readline():
+                return
+        except KeyboardInterrupt:  # the launch was stopped while the caller waited
+            return
 
     def out(fig, filename):
         fig.tight_layout()
