@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Draws the figures of a gear_aggregator report (the paper's Figs. 5-12) from its CSV files.
 
-usage: plot_report.py REPORT_FOLDER [--mu 0.04]
+usage: plot_report.py REPORT_FOLDER [--mu 0.04] [--wait]
 
 For a study with more axes than mu (points.csv with more than one axis column, doc/studies.md) it
 draws the study's figures instead: axis_<key>.png per swept axis and, for a 2-D grid,
@@ -10,6 +10,9 @@ mu or point: safety_over_time.png, first_passage.png, spectrum_band.png and poin
 
 Every number comes from the CSV files the aggregator wrote (paper units); this script only draws.
 --mu selects the friction coefficient of the series and joint-PDF figures (the paper's 0.04).
+--wait reads a line from stdin before reading the folder (end of input: exit 0, nothing drawn):
+gear_aggregator starts the script early, so that Python and matplotlib are loaded when its CSV
+files are written.
 """
 import argparse
 import csv
@@ -25,8 +28,11 @@ from matplotlib.ticker import MaxNLocator  # noqa: E402
 
 
 def read(folder, name):
+    """The rows of a CSV file as dicts (column -> text); dict(zip()) is about twice csv.DictReader's speed."""
     with open(os.path.join(folder, name), newline="") as f:
-        return list(csv.DictReader(f))
+        rows = csv.reader(f)
+        header = next(rows, [])
+        return [dict(zip(header, r)) for r in rows]
 
 
 def col(rows, key):
@@ -378,7 +384,14 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("folder")
     parser.add_argument("--mu", type=float, default=0.04, help="mu of Figs. 5-7 and 10 (default 0.04)")
+    parser.add_argument("--wait", action="store_true", help="draw only after a line on stdin (end of input: exit 0)")
     args = parser.parse_args()
+    if args.wait:
+        try:
+            if not sys.stdin.readline():
+                return
+        except KeyboardInterrupt:  # the launch was stopped while the caller waited
+            return
 
     def out(fig, filename):
         fig.tight_layout()
@@ -393,11 +406,12 @@ def main():
                           lambda: poincare_figure(args.folder, out)])
         print("plot_report: study figures written to %s" % args.folder)
         return
-    # Dearest first (the series and the spectrum band read the largest CSV files), so that dealing
-    # them out round-robin gives the processes like shares.
+    # Dearest first (the series, spectrum band and Poincaré points are the largest CSV files), so
+    # that the cheap ones, taken last, even out the processes' shares.
     draw_in_parallel([
-        lambda: series_figures(args.folder, args.mu, out),
         lambda: spectrum_figure(args.folder, out),
+        lambda: series_figures(args.folder, args.mu, out),
+        lambda: poincare_figure(args.folder, out),
         lambda: joint_figure(args.folder, args.mu, out),
         lambda: pdf_figure(args.folder, "pdf_delta.csv", "mm", "δ(T)", "PDF of δ at T (Fig. 11)", "fig11_pdf_delta.png",
                            out),
@@ -412,18 +426,30 @@ def main():
 
 
 def draw_in_parallel(tasks):
-    """Runs the figure functions in one forked process per core (task i in process i mod n); each
-    figure is drawn whole by one process, so the files are those of a serial run. Exits with
-    status 1 if any process failed."""
+    """Runs the figure functions in one forked process per core, each process taking the next task
+    when it is free (the tasks' costs differ by 5x: dealing them out in turn left one process idle
+    for a second); each figure is drawn whole by one process, so the files are those of a serial
+    run. Exits with status 1 if any process failed."""
     n = max(1, min(len(os.sched_getaffinity(0)), len(tasks)))
+    # The task numbers, one byte each, in a pipe: a read of one byte takes exactly one.
+    todo, queue = os.pipe()
+    os.write(queue, bytes(range(len(tasks))))
+    os.close(queue)
+
+    def work():
+        while True:
+            task = os.read(todo, 1)
+            if not task:
+                return
+            tasks[task[0]]()
+
     children = []
-    for k in range(1, n):
+    for _ in range(1, n):
         pid = os.fork()
         if pid == 0:
             status = 0
             try:
-                for task in tasks[k::n]:
-                    task()
+                work()
             except BaseException:  # noqa: B902 -- report it, then end the child without cleanup
                 import traceback
                 traceback.print_exc()
@@ -433,8 +459,7 @@ def draw_in_parallel(tasks):
         children.append(pid)
     failed = False
     try:
-        for task in tasks[0::n]:
-            task()
+        work()
     finally:
         for pid in children:
             failed = os.waitpid(pid, 0)[1] != 0 or failed

@@ -26,6 +26,10 @@ status=0
 # target: some documented commands build the workspace, which must not happen inside catkin_make.
 /usr/bin/python3 "$GD_REPO/test/docs/run_doc_commands.py" "$GD_WS/build/test_results/gear_dynamics/doc-commands.xml" ||
   status=1
+# setup.sh's skip of catkin_make when nothing changed, and its rebuild when something did (it runs
+# catkin_make, so here too).
+/usr/bin/python3 "$GD_REPO/test/setup/build_check.py" "$GD_WS/build/test_results/gear_dynamics/setup-build_check.xml" ||
+  status=1
 echo
 catkin_test_results --verbose "$GD_WS/build/test_results" || status=1
 # The fault suite's table: cases tried and passed per category (test/faults/summary.py).

@@ -1,11 +1,14 @@
 #include "gear_dynamics/ros/aggregator_node.hpp"
 
+#include <fcntl.h>
 #include <ros/master.h>
 #include <spawn.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <csignal>
 #include <filesystem>
 
 #include "gear_dynamics/analysis/study_analysis.hpp"
@@ -26,7 +29,11 @@ AggregatorNode::AggregatorNode(const ros::NodeHandle& private_nh)
 }
 
 bool AggregatorNode::run() {
-  if (settings_.wait_for_batch && !wait()) return false;
+  start_plot();
+  if (settings_.wait_for_batch && !wait()) {
+    plot(false);
+    return false;
+  }
   try {
     std::filesystem::create_directories(report_folder_);
     ReadOptions options;
@@ -42,10 +49,11 @@ bool AggregatorNode::run() {
     const std::string sections = write_over_time(report_folder_, inputs, analysis, over_time, written);
     const std::vector<std::string> report = write_report(report_folder_, inputs, analysis, &study, sections);
     ROS_INFO("gear_aggregator: %zu files written", written.size() + report.size());
-    plot();
+    plot(true);
     publisher_.publish(make_report_message(inputs, analysis, report_folder_));
   } catch (const std::exception& ex) {
     ROS_FATAL("gear_aggregator: %s", ex.what());
+    plot(false);
     return false;
   }
   rusage usage{};
@@ -96,18 +104,40 @@ bool AggregatorNode::wait() {
   return false;
 }
 
-void AggregatorNode::plot() const {
+void AggregatorNode::start_plot() {
   if (settings_.plot_script.empty()) return;
-  std::vector<std::string> args{"/usr/bin/python3", settings_.plot_script, report_folder_};
+  std::vector<std::string> args{"/usr/bin/python3", settings_.plot_script, report_folder_, "--wait"};
   std::vector<char*> argv;
   for (std::string& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
-  pid_t pid;
+  int go[2];
+  if (pipe2(go, O_CLOEXEC) != 0) return;  // then plot() draws nothing and says so
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, go[0], STDIN_FILENO);  // dup2 clears O_CLOEXEC on stdin
+  if (posix_spawn(&plot_pid_, argv[0], &actions, nullptr, argv.data(), environ) != 0) plot_pid_ = -1;
+  posix_spawn_file_actions_destroy(&actions);
+  close(go[0]);
+  plot_go_ = go[1];
+  signal(SIGPIPE, SIG_IGN);  // a script that died early must not end this node at the write (roscpp ignores it too)
+}
+
+void AggregatorNode::plot(bool draw) {
+  if (plot_go_ < 0) {
+    if (draw && !settings_.plot_script.empty())
+      ROS_WARN("gear_aggregator: %s could not be started; the report and CSV files are complete",
+               settings_.plot_script.c_str());
+    return;
+  }
+  const bool told = !draw || write(plot_go_, "draw\n", 5) == 5;
+  close(plot_go_);
+  plot_go_ = -1;
   int status = 0;
-  if (posix_spawn(&pid, argv[0], nullptr, nullptr, argv.data(), environ) != 0 || waitpid(pid, &status, 0) < 0 ||
-      !WIFEXITED(status) || WEXITSTATUS(status) != 0)
+  const bool ended = plot_pid_ > 0 && waitpid(plot_pid_, &status, 0) == plot_pid_;
+  plot_pid_ = -1;
+  if (draw && (!told || !ended || !WIFEXITED(status) || WEXITSTATUS(status) != 0))
     ROS_WARN("gear_aggregator: %s did not draw the figures (exit status %d); the report and CSV files are complete",
-             settings_.plot_script.c_str(), WIFEXITED(status) ? WEXITSTATUS(status) : -1);
+             settings_.plot_script.c_str(), ended && WIFEXITED(status) ? WEXITSTATUS(status) : -1);
 }
 
 }  // namespace gear_dynamics

@@ -26,13 +26,19 @@ class AggregatorNode {
   // Until every folder's manifest lists only finished bags, or the batch node has come and gone
   // (it failed or was stopped: what it left is aggregated, the rest reported missing).
   bool wait();
-  // Figures from the CSV files (scripts/plot_report.py); a failure costs the figures, not the report.
-  void plot() const;
+  // Figures from the CSV files (scripts/plot_report.py --wait); a failure costs the figures, not the
+  // report. The script is started before the wait and the reading, so that Python and matplotlib
+  // are loaded (0.4-0.9 s) by the time the CSV files are there; plot(true) lets it draw and waits
+  // for it, plot(false) lets it end without drawing. Only the first call acts.
+  void start_plot();
+  void plot(bool draw);
 
   ros::NodeHandle private_nh_;
   AggregatorSettings settings_;
   std::string report_folder_;
   ros::Publisher publisher_;
+  pid_t plot_pid_ = -1;  // the started plot script, -1: none
+  int plot_go_ = -1;     // the write end of its stdin: a line there means draw, EOF means end
 };
 
 }  // namespace gear_dynamics
