@@ -420,7 +420,6 @@ def main():
         lambda: safety_figure(args.folder, out),
         lambda: center_distance_figures(args.folder, out),
         lambda: first_passage_figure(args.folder, out),
-        lambda: poincare_figure(args.folder, out),
     ])
     print("plot_report: figures written to %s" % args.folder)
 
