@@ -15,6 +15,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -296,6 +297,9 @@ struct BagRead {
   std::string error;
 };
 
+// Takes the contents of job i's bag as its frame arrives (from the reader threads, one at a time).
+using TakeBag = std::function<void(std::size_t, BagRead&)>;
+
 // The child of read_bags_in_child: reads jobs[first...] and sends a frame per bag into the pipe,
 // then _exit (no destructors, no atexit).
 [[noreturn]] void read_bags_into_pipe(const std::vector<BagJob>& jobs, std::size_t first, const int fds[2]) {
@@ -326,8 +330,10 @@ struct BagRead {
 // bags because forks are dear here (a child per bag made reading 990 bags 7x slower). The child
 // sends a frame per bag: index (4 bytes), status (1: 0 contents, 1 Skip, 2 other error), payload
 // length (4) and payload (the serialized contents or the message); the parent takes each frame
-// as it arrives, so no more than one bag's frame is buffered.
-std::vector<BagRead> read_bags_in_child(const std::vector<BagJob>& jobs) {
+// as it arrives, so no more than one bag's frame is buffered, and hands a frame with contents to
+// `take` at once (index into `jobs`); the others stay in the result.
+std::vector<BagRead> read_bags_in_child(const std::vector<BagJob>& jobs, const TakeBag& take) {
+  std::exception_ptr take_error;  // from `take`: rethrown once the child has ended
   std::vector<BagRead> out(jobs.size());
   std::vector<bool> done(jobs.size(), false);
   std::size_t first = 0;
@@ -363,6 +369,11 @@ std::vector<BagRead> read_bags_in_child(const std::vector<BagJob>& jobs) {
         const std::uint8_t status = data[at + 4];
         if (status == 0) {
           out[index].contents = deserialize(payload);
+          try {
+            if (!take_error) take(index, out[index]);
+          } catch (...) {
+            take_error = std::current_exception();
+          }
         } else {
           const std::string what(payload.begin(), payload.end());
           out[index].error = status == 1 ? what : "unreadable bag (truncated or corrupted): " + what;
@@ -385,6 +396,7 @@ std::vector<BagRead> read_bags_in_child(const std::vector<BagJob>& jobs) {
     int wstatus = 0;
     while (::waitpid(pid, &wstatus, 0) < 0 && errno == EINTR) {
     }
+    if (take_error) std::rethrow_exception(take_error);
     while (first < jobs.size() && done[first]) ++first;
     if (first == jobs.size()) break;
     // The bag in hand when the child ended.
@@ -399,8 +411,9 @@ std::vector<BagRead> read_bags_in_child(const std::vector<BagJob>& jobs) {
 }
 
 // The bags read by one child per core at once (read_bags_in_child; bag i goes to reader
-// i mod readers), each child's pipe drained by a thread of its own.
-std::vector<BagRead> read_bags_isolated(const std::vector<BagJob>& jobs) {
+// i mod readers), each child's pipe drained by a thread of its own, which hands each bag's contents
+// to `take` (index into `jobs`; one call at a time) as they arrive.
+std::vector<BagRead> read_bags_isolated(const std::vector<BagJob>& jobs, const TakeBag& take) {
   const std::size_t readers =
       std::min<std::size_t>(std::max(1u, std::thread::hardware_concurrency()), std::max<std::size_t>(1, jobs.size()));
   std::vector<std::vector<BagJob>> part(readers);
@@ -408,10 +421,14 @@ std::vector<BagRead> read_bags_isolated(const std::vector<BagJob>& jobs) {
   std::vector<std::vector<BagRead>> read(readers);
   std::vector<std::exception_ptr> error(readers);
   std::vector<std::thread> threads;
+  std::mutex taking;
   for (std::size_t r = 0; r < readers; ++r)
     threads.emplace_back([&, r] {
       try {
-        read[r] = read_bags_in_child(part[r]);
+        read[r] = read_bags_in_child(part[r], [&](std::size_t i, BagRead& bag) {
+          std::lock_guard<std::mutex> lock(taking);
+          take(i * readers + r, bag);
+        });
       } catch (...) {
         error[r] = std::current_exception();
       }
@@ -456,8 +473,8 @@ class ParametersCache {
   std::map<std::string, ParsedParameters> parsed_;
 };
 
-// The run record of bag `read` of run `e`, if it is that run of this batch (its series moved out of
-// `read`); else throws Skip.
+// The run record of bag `read` of run `e`, if it is that run of this batch (its Poincaré points
+// moved out of `read`); else throws Skip.
 RunRecord check_run(BagRead& read, const ManifestRun& e, const Manifest& manifest, ParametersCache& parameters) {
   const auto require = [](bool ok, const std::string& why) {
     if (!ok) throw Skip(why);
@@ -519,9 +536,6 @@ RunRecord check_run(BagRead& read, const ManifestRun& e, const Manifest& manifes
   r.snapshot_times = summary->snapshot_times;
   r.snapshot_delta = summary->snapshot_delta;
   r.snapshot_delta_dot = summary->snapshot_delta_dot;
-  r.series_times = std::move(bag.t);
-  r.series_delta = std::move(bag.delta);
-  r.series_delta_dot = std::move(bag.delta_dot);
   r.section_times = std::move(bag.section_t);
   r.section_delta = std::move(bag.section_delta);
   r.section_delta_dot = std::move(bag.section_delta_dot);
@@ -654,25 +668,36 @@ BatchInputs read_batches(const std::vector<std::string>& folder_args, const Read
       for (Candidate& c : list) {
         if (c.record) break;
         if (c.tried) continue;
-        // Every stochastic run's states: safety over time, first passage and the spectrum
-        // (doc/gear_aggregator.md §5).
-        jobs.push_back({c.file, wants_series ? &e : nullptr, e.kind == RunKind::Stochastic});
+        // Every stochastic run's states, for options.on_series: safety over time, first passage
+        // and the spectrum (doc/gear_aggregator.md §5).
+        jobs.push_back({c.file, wants_series ? &e : nullptr, options.on_series && e.kind == RunKind::Stochastic});
         round.emplace_back(&c, &entry);
         break;
       }
     }
     if (jobs.empty()) break;
-    std::vector<BagRead> reads = read_bags_isolated(jobs);
-    for (std::size_t i = 0; i < reads.size(); ++i) {
+    // Each bag as it arrives: checked, its series handed to options.on_series, then dropped, so
+    // that no more than one bag's series per reader is held at a time.
+    const auto take = [&](std::size_t i, BagRead& read) {
       Candidate& c = *round[i].first;
       c.tried = true;
       try {
-        c.record = check_run(reads[i], round[i].second->first, *round[i].second->second, parameters);
-        c.rows = std::move(reads[i].contents->series);
-        reads[i].contents.reset();
+        c.record = check_run(read, round[i].second->first, *round[i].second->second, parameters);
+        BagContents& bag = *read.contents;
+        c.rows = std::move(bag.series);
+        if (options.on_series && c.record->kind == RunKind::Stochastic && !bag.t.empty())
+          options.on_series(in, *c.record, bag.t, bag.delta, bag.delta_dot);
       } catch (const Skip& ex) {
         c.reason = ex.what();
       }
+      read.contents.reset();
+    };
+    const std::vector<BagRead> reads = read_bags_isolated(jobs, take);
+    for (std::size_t i = 0; i < reads.size(); ++i) {
+      Candidate& c = *round[i].first;
+      if (c.tried) continue;
+      c.tried = true;
+      c.reason = reads[i].error;  // unreadable: no contents came
     }
   }
   std::map<fs::path, std::size_t> usable;  // runs each folder provides
