@@ -230,7 +230,14 @@ void SeriesDigests::add(const BatchInputs& in, const RunRecord& r, const std::ve
   }
   ++g.runs;
 
-  // This run's PSD, if its series is dense enough for the group's spectrum (spectrum_of).
+  // This run's PSD, if its series is dense enough for the group's spectrum and at the highest rate
+  // so far (spectrum_of uses the runs at the group's highest rate only).
+  const auto below = [](double rate, double top) { return std::abs(rate - top) > 1e-6 * top && rate < top; };
+  if (below(g.top_rate, run.sample_rate)) {
+    g.top_rate = run.sample_rate;
+    for (Run& other : runs_)
+      if (other.mu == r.mu && other.point == r.point && below(other.sample_rate, g.top_rate)) other.psd.reset();
+  }
   auto model = mesh_frequency_duration_.find(r.point);
   if (model == mesh_frequency_duration_.end()) {
     ModelConfig c = in.config;
@@ -243,7 +250,7 @@ void SeriesDigests::add(const BatchInputs& in, const RunRecord& r, const std::ve
   }
   const auto [mesh_frequency, duration] = model->second;
   const std::size_t segment = spectrum_segment(run.sample_rate, mesh_frequency, duration, settings_.spectrum_transient);
-  if (run.sample_rate >= kDenseRateOverMeshFrequency * mesh_frequency && segment > 0) {
+  if (run.sample_rate >= kDenseRateOverMeshFrequency * mesh_frequency && segment > 0 && !below(run.sample_rate, g.top_rate)) {
     std::vector<double> x;
     for (std::size_t j = 0; j < n; ++j)
       if (t[j] >= settings_.spectrum_transient - kTimeMatch) x.push_back(delta[j]);

@@ -265,9 +265,9 @@ std::vector<std::uint8_t> serialize(const BagContents& c) {
   return buf;
 }
 
-BagContents deserialize(std::vector<std::uint8_t>& buf) {
+BagContents deserialize(std::uint8_t* data, std::uint32_t size) {
   BagContents c;
-  ros::serialization::IStream in(buf.data(), static_cast<std::uint32_t>(buf.size()));
+  ros::serialization::IStream in(data, size);
   fields(in, c);
   return c;
 }
@@ -364,18 +364,17 @@ std::vector<BagRead> read_bags_in_child(const std::vector<BagJob>& jobs, const T
         std::memcpy(&index, &data[at], 4);
         std::memcpy(&size, &data[at + 5], 4);
         if (index >= jobs.size() || at + 9 + size > data.size()) break;
-        std::vector<std::uint8_t> payload(data.begin() + static_cast<std::ptrdiff_t>(at + 9),
-                                          data.begin() + static_cast<std::ptrdiff_t>(at + 9 + size));
+        std::uint8_t* payload = &data[at + 9];
         const std::uint8_t status = data[at + 4];
         if (status == 0) {
-          out[index].contents = deserialize(payload);
+          out[index].contents = deserialize(payload, size);
           try {
             if (!take_error) take(index, out[index]);
           } catch (...) {
             take_error = std::current_exception();
           }
         } else {
-          const std::string what(payload.begin(), payload.end());
+          const std::string what(payload, payload + size);
           out[index].error = status == 1 ? what : "unreadable bag (truncated or corrupted): " + what;
         }
         done[index] = true;

@@ -89,6 +89,7 @@ class SeriesDigests {
   };
   struct Group {
     std::size_t runs = 0;
+    double top_rate = 0;  // the highest sample rate of its runs so far: only those have a PSD
     std::vector<Time> times;  // the times all its runs recorded (within 1e-9 s), ascending
   };
   struct Run {
@@ -97,7 +98,7 @@ class SeriesDigests {
     std::uint32_t realization = 0;
     std::vector<double> outside;  // [start, end] pairs: maximal stretches of samples outside the safe set
     double sample_rate = 0;       // (n - 1) / (t_last - t_first) [Hz]
-    std::optional<Psd> psd;       // if the series is dense enough for the spectrum
+    std::optional<Psd> psd;       // if the series is dense enough for the spectrum and of the group's top rate
   };
   // Groups keyed by (mu, point): one group of the report either way (mu sweep or study).
   const std::map<std::pair<double, std::size_t>, Group>& groups() const { return groups_; }
