@@ -708,7 +708,7 @@ BatchInputs read_batches(const std::vector<std::string>& folder_args, const Read
     fs::path folder, file;
     bool tried = false;
     std::optional<RunRecord> record;
-    std::string rows, reason;  // its series rows, or why it is not usable
+    std::string rows, reason;  // the file holding its series rows (if any), or why it is not usable
   };
   std::map<std::string, std::vector<Candidate>> candidates;
   ParametersCache parameters;
@@ -747,7 +747,12 @@ BatchInputs read_batches(const std::vector<std::string>& folder_args, const Read
       try {
         c.record = check_run(read, round[i].second->first, *round[i].second->second, parameters);
         BagContents& bag = *read.contents;
-        c.rows = std::move(bag.series);
+        if (!bag.series.empty()) {  // to a file of its own until series.csv is written in the listed order
+          c.rows = options.series_csv + "." + round[i].second->first.name + ".part";
+          std::ofstream part(c.rows, std::ios::binary);
+          part << bag.series;
+          if (!part.flush()) throw BatchReadError("cannot write " + c.rows);
+        }
         if (options.on_series && c.record->kind == RunKind::Stochastic && !bag.t.empty())
           options.on_series(in, *c.record, bag.t, bag.delta, bag.delta_dot);
       } catch (const Skip& ex) {
@@ -774,7 +779,10 @@ BatchInputs read_batches(const std::vector<std::string>& folder_args, const Read
         in.runs.push_back(std::move(*c.record));
         used = c.file.string();
         ++usable[c.folder];
-        series << c.rows;
+        if (!c.rows.empty()) {
+          series << std::ifstream(c.rows, std::ios::binary).rdbuf();
+          fs::remove(c.rows);
+        }
       } else {
         skip(c.file, c.reason);
       }
