@@ -361,6 +361,12 @@ struct BagRead {
   std::string error;
 };
 
+// Held by a reader thread while it forks a child and while it handles what came through its pipe:
+// so `take` calls come one at a time, and no reader thread allocates while another forks (a
+// child forked then could inherit a locked allocator; seen under ASan, whose allocator has no
+// fork handler here).
+std::mutex reader_lock;
+
 // Takes the contents of job i's bag as its frame arrives (from the reader threads, one at a time).
 using TakeBag = std::function<void(std::size_t, BagRead&)>;
 
@@ -408,8 +414,7 @@ std::vector<BagRead> read_bags_in_child(const std::vector<BagJob>& jobs, const T
       // Another reader thread forking between this pipe's creation and the close of its write
       // end below would give its child a copy of that end, and this pipe's end of file would then
       // wait for that child as well.
-      static std::mutex forking;
-      std::lock_guard<std::mutex> lock(forking);
+      std::lock_guard<std::mutex> lock(reader_lock);
       if (::pipe2(fds, O_CLOEXEC) != 0)
         throw BatchReadError(std::string("cannot read bags: pipe: ") + std::strerror(errno));
       pid = ::fork();
@@ -452,6 +457,7 @@ std::vector<BagRead> read_bags_in_child(const std::vector<BagJob>& jobs, const T
       const ssize_t n = ::read(fds[0], chunk, sizeof chunk);
       if (n < 0 && errno == EINTR) continue;
       if (n <= 0) break;
+      std::lock_guard<std::mutex> lock(reader_lock);
       data.insert(data.end(), chunk, chunk + n);
       take_frames();
     }
@@ -484,12 +490,10 @@ std::vector<BagRead> read_bags_isolated(const std::vector<BagJob>& jobs, const T
   std::vector<std::vector<BagRead>> read(readers);
   std::vector<std::exception_ptr> error(readers);
   std::vector<std::thread> threads;
-  std::mutex taking;
   for (std::size_t r = 0; r < readers; ++r)
     threads.emplace_back([&, r] {
       try {
         read[r] = read_bags_in_child(part[r], [&](std::size_t i, BagRead& bag) {
-          std::lock_guard<std::mutex> lock(taking);
           take(i * readers + r, bag);
         });
       } catch (...) {
