@@ -490,6 +490,7 @@ std::vector<BagRead> read_bags_isolated(const std::vector<BagJob>& jobs, const T
   std::vector<std::vector<BagRead>> read(readers);
   std::vector<std::exception_ptr> error(readers);
   std::vector<std::thread> threads;
+  std::unique_lock<std::mutex> starting(reader_lock);  // no thread forks while this one allocates
   for (std::size_t r = 0; r < readers; ++r)
     threads.emplace_back([&, r] {
       try {
@@ -500,6 +501,7 @@ std::vector<BagRead> read_bags_isolated(const std::vector<BagJob>& jobs, const T
         error[r] = std::current_exception();
       }
     });
+  starting.unlock();
   for (std::thread& t : threads) t.join();
   for (const std::exception_ptr& e : error)
     if (e) std::rethrow_exception(e);
