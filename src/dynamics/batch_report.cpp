@@ -108,19 +108,15 @@ ModelConfig group_config(const BatchInputs& in, const BatchAnalysis& a, std::siz
   return apply_point(in.config, keys, in.points[i]);
 }
 
-double sample_rate(const RunRecord& r) {
-  const std::size_t n = r.series_times.size();
-  return n < 2 ? 0.0 : static_cast<double>(n - 1) / (r.series_times.back() - r.series_times.front());
-}
-
-// The mean PSD of delta over the group's densest series, if they resolve the mesh harmonics.
-std::optional<GroupSpectrum> spectrum_of(const std::vector<const RunRecord*>& runs, const ModelConfig& c,
+// The mean PSD of delta over the group's densest series, if they resolve the mesh harmonics (each
+// run's PSD taken by SeriesDigests::add as it was read).
+std::optional<GroupSpectrum> spectrum_of(const std::vector<const SeriesDigests::Run*>& runs, const ModelConfig& c,
                                          double transient, std::string& why_not) {
   GroupSpectrum s;
   s.mesh_frequency = 1.0 / mesh_period(derive(c.gear));
   s.transient = transient;
   double fs = 0;
-  for (const RunRecord* r : runs) fs = std::max(fs, sample_rate(*r));
+  for (const SeriesDigests::Run* r : runs) fs = std::max(fs, r->sample_rate);
   if (fs < kDenseRateOverMeshFrequency * s.mesh_frequency) {
     why_not = "no realization has a series at >= " + general(kDenseRateOverMeshFrequency, 3) + " f_m = " +
               general(kDenseRateOverMeshFrequency * s.mesh_frequency, 4) + " Hz (monte_carlo.record_rate, record_realizations)";
@@ -133,19 +129,21 @@ std::optional<GroupSpectrum> spectrum_of(const std::vector<const RunRecord*>& ru
               general(c.run.duration, 6) + " s";
     return std::nullopt;
   }
-  const WelchOptions options{static_cast<std::size_t>(std::llround(periods * fs / s.mesh_frequency)), 0.5};
   std::vector<Psd> psds;
-  for (const RunRecord* r : runs) {
-    if (std::abs(sample_rate(*r) - fs) > 1e-6 * fs) continue;
-    std::vector<double> x;
-    for (std::size_t j = 0; j < r->series_times.size(); ++j)
-      if (r->series_times[j] >= transient - kTimeMatch) x.push_back(r->series_delta[j]);
-    psds.push_back(welch_psd(x, fs, options));
-  }
+  for (const SeriesDigests::Run* r : runs)
+    if (std::abs(r->sample_rate - fs) <= 1e-6 * fs && r->psd) psds.push_back(*r->psd);
   s.first = psds.front();
   s.band = psd_band(psds);
   s.peaks = mark_peaks(s.band.frequency, s.band.mean, s.mesh_frequency, kSpectrumHarmonics);
   return s;
+}
+
+// Segments of the ensemble PSD for a series at `rate` (as many mesh periods as fit after the
+// transient, at most kSpectrumSegmentPeriods); 0 when not even one does.
+std::size_t spectrum_segment(double rate, double mesh_frequency, double duration, double transient) {
+  const int periods =
+      std::min(kSpectrumSegmentPeriods, static_cast<int>(std::floor((duration - transient) * mesh_frequency + 1e-9)));
+  return periods < 1 ? 0 : static_cast<std::size_t>(std::llround(periods * rate / mesh_frequency));
 }
 
 Kde kde_of(const std::vector<const RunRecord*>& runs, double RunRecord::*value, const BinSpec& range) {
@@ -179,61 +177,142 @@ class CsvFile {
 
 }  // namespace
 
-RecordedRuns common_series(const std::vector<const RunRecord*>& runs) {
-  RecordedRuns out;
-  if (runs.empty()) return out;
-  // The shortest series' times, kept where every run has a state.
-  const RunRecord* shortest = *std::min_element(runs.begin(), runs.end(), [](const RunRecord* x, const RunRecord* y) {
-    return x->series_times.size() < y->series_times.size();
-  });
-  std::vector<std::vector<std::size_t>> at(runs.size());
-  std::vector<std::size_t> cursor(runs.size(), 0);
-  for (double t : shortest->series_times) {
-    bool everywhere = true;
-    for (std::size_t r = 0; r < runs.size(); ++r) {
-      const std::vector<double>& ts = runs[r]->series_times;
-      std::size_t& j = cursor[r];
-      while (j < ts.size() && ts[j] < t - kTimeMatch) ++j;
-      everywhere = everywhere && j < ts.size() && std::abs(ts[j] - t) <= kTimeMatch;
-    }
-    if (!everywhere) continue;
-    out.time.push_back(t);
-    for (std::size_t r = 0; r < runs.size(); ++r) at[r].push_back(cursor[r]);
+void SeriesDigests::add(const BatchInputs& in, const RunRecord& r, const std::vector<double>& t,
+                        const std::vector<double>& delta, const std::vector<double>& delta_dot) {
+  const std::size_t n = t.size();
+  if (n == 0 || delta.size() != n || delta_dot.size() != n)
+    throw std::invalid_argument("SeriesDigests::add: an empty series, or times, delta and delta_dot of different lengths");
+  const Interval& di = settings_.delta_interval;
+  const Interval& vi = settings_.delta_dot_interval;
+  Run run;
+  run.mu = r.mu;
+  run.point = r.point;
+  run.realization = r.index;
+  run.sample_rate = n < 2 ? 0.0 : static_cast<double>(n - 1) / (t.back() - t.front());
+  bool outside = false;  // the previous sample was outside the safe set
+  for (std::size_t j = 0; j < n; ++j) {
+    const bool inside = di.contains(delta[j]) && vi.contains(delta_dot[j]);
+    if (!inside && outside) run.outside.back() = t[j];
+    if (!inside && !outside) run.outside.insert(run.outside.end(), {t[j], t[j]});
+    outside = !inside;
   }
-  for (std::size_t r = 0; r < runs.size(); ++r) {
-    out.delta.emplace_back();
-    out.velocity.emplace_back();
-    for (std::size_t j : at[r]) {
-      out.delta.back().push_back(runs[r]->series_delta[j]);
-      out.velocity.back().push_back(runs[r]->series_delta_dot[j]);
+
+  // The safety counters at the times all the group's runs recorded so far: the first run's times,
+  // then those every later run has as well.
+  Group& g = groups_[{r.mu, r.point}];
+  const auto count = [&](Time& k, std::size_t j) {
+    const bool a = di.contains(delta[j]), b = vi.contains(delta_dot[j]);
+    k.joint += a && b;
+    k.delta += a;
+    k.velocity += b;
+    if (std::make_pair(n, r.index) < std::make_pair(k.samples_of, k.realization_of)) {
+      k.t = t[j];
+      k.samples_of = n;
+      k.realization_of = r.index;
     }
+  };
+  if (g.runs == 0) {
+    g.times.resize(n);
+    for (std::size_t j = 0; j < n; ++j) {
+      g.times[j].samples_of = ~std::size_t{0};
+      count(g.times[j], j);
+    }
+  } else {
+    std::vector<Time> kept;
+    std::size_t j = 0;
+    for (Time& k : g.times) {
+      while (j < n && t[j] < k.t - kTimeMatch) ++j;
+      if (j == n || std::abs(t[j] - k.t) > kTimeMatch) continue;
+      count(k, j);
+      kept.push_back(k);
+    }
+    g.times = std::move(kept);
   }
-  return out;
+  ++g.runs;
+
+  // This run's PSD, if its series is dense enough for the group's spectrum and at the highest rate
+  // so far (spectrum_of uses the runs at the group's highest rate only).
+  const auto below = [](double rate, double top) { return std::abs(rate - top) > 1e-6 * top && rate < top; };
+  if (below(g.top_rate, run.sample_rate)) {
+    g.top_rate = run.sample_rate;
+    for (Run& other : runs_)
+      if (other.mu == r.mu && other.point == r.point && below(other.sample_rate, g.top_rate)) other.psd.reset();
+  }
+  auto model = mesh_frequency_duration_.find(r.point);
+  if (model == mesh_frequency_duration_.end()) {
+    ModelConfig c = in.config;
+    if (r.point < in.points.size()) {
+      std::vector<std::string> keys;
+      for (const SweepAxis& axis : in.axes) keys.push_back(axis.key);
+      c = apply_point(in.config, keys, in.points[r.point]);
+    }
+    model = mesh_frequency_duration_.emplace(r.point, std::make_pair(1.0 / mesh_period(derive(c.gear)), c.run.duration)).first;
+  }
+  const auto [mesh_frequency, duration] = model->second;
+  const std::size_t segment = spectrum_segment(run.sample_rate, mesh_frequency, duration, settings_.spectrum_transient);
+  if (run.sample_rate >= kDenseRateOverMeshFrequency * mesh_frequency && segment > 0 && !below(run.sample_rate, g.top_rate)) {
+    std::vector<double> x;
+    for (std::size_t j = 0; j < n; ++j)
+      if (t[j] >= settings_.spectrum_transient - kTimeMatch) x.push_back(delta[j]);
+    run.psd = welch_psd(x, run.sample_rate, WelchOptions{segment, 0.5});
+  }
+  runs_.push_back(std::move(run));
 }
 
-BatchOverTime analyse_over_time(const BatchInputs& in, const BatchAnalysis& a) {
+BatchOverTime analyse_over_time(const BatchInputs& in, const BatchAnalysis& a, const SeriesDigests& digests) {
   const AnalysisSettings& s = a.settings;
   BatchOverTime out;
   for (std::size_t i = 0; i < a.mu.size(); ++i) {
     const std::string label = a.keys.empty() ? "mu = " + general(a.mu[i].mu, 6) : "point " + a.keys[i];
     const std::vector<const RunRecord*> all = group_runs(in, a, i);
-    std::vector<const RunRecord*> runs;
-    for (const RunRecord* r : all)
-      if (!r->series_times.empty()) runs.push_back(r);
+    std::vector<const SeriesDigests::Run*> runs;  // the realizations with a series, by index
+    for (const SeriesDigests::Run& r : digests.runs())
+      if (a.keys.empty() ? r.mu == a.mu[i].mu : r.point == i) runs.push_back(&r);
+    std::sort(runs.begin(), runs.end(), [](const SeriesDigests::Run* x, const SeriesDigests::Run* y) {
+      return x->realization < y->realization;
+    });
     GroupOverTime grp;
     grp.runs = runs.size();
-    for (const RunRecord* r : runs) grp.realizations.push_back(r->index);
-    const RecordedRuns series = common_series(runs);
-    if (series.time.empty()) {
+    for (const SeriesDigests::Run* r : runs) grp.realizations.push_back(r->realization);
+    static const std::vector<SeriesDigests::Time> kNoTimes;
+    const std::vector<SeriesDigests::Time>& times =
+        runs.empty() ? kNoTimes : digests.groups().at({runs.front()->mu, runs.front()->point}).times;
+    if (times.empty()) {
       if (!all.empty()) out.notes.push_back(label + ": no recorded series common to the realizations (sparse_record_rate 0?): no safety over time, first passage or spectrum");
     } else {
-      grp.safety = safety_over_time(series, s.delta_interval, s.delta_dot_interval, s.confidence);
-      if (series.time.back() >= s.first_passage_settle - kTimeMatch) {
-        grp.passage = first_passage(series, s.delta_interval, s.delta_dot_interval, s.first_passage_settle - kTimeMatch);
+      const std::size_t n = runs.size();
+      for (const SeriesDigests::Time& k : times) {
+        grp.safety.time.push_back(k.t);
+        grp.safety.joint.push_back(wilson(k.joint, n, s.confidence));
+        grp.safety.delta_only.push_back(wilson(k.delta, n, s.confidence));
+        grp.safety.velocity_only.push_back(wilson(k.velocity, n, s.confidence));
+      }
+      if (times.back().t >= s.first_passage_settle - kTimeMatch) {
+        // Each run's first common time from the settling time on that lies in one of its
+        // stretches outside the safe set; censored at the last common time.
+        const double settle = s.first_passage_settle - kTimeMatch;
+        FirstPassage passage;
+        for (const SeriesDigests::Run* r : runs) {
+          bool hit = false;
+          double t = times.back().t;
+          std::size_t stretch = 0;
+          for (const SeriesDigests::Time& k : times) {
+            if (k.t < settle) continue;
+            while (stretch + 1 < r->outside.size() && r->outside[stretch + 1] < k.t - kTimeMatch) stretch += 2;
+            if (stretch + 1 < r->outside.size() && r->outside[stretch] <= k.t + kTimeMatch) {
+              hit = true;
+              t = k.t;
+              break;
+            }
+          }
+          passage.time.push_back(t);
+          passage.event.push_back(hit);
+        }
+        grp.passage = std::move(passage);
         grp.survival = kaplan_meier(grp.passage->time, grp.passage->event, s.confidence);
       } else {
         out.notes.push_back(label + ": analysis.first_passage_settle = " + general(s.first_passage_settle, 6) +
-                            " s is after the last recorded time " + general(series.time.back(), 6) + " s: no first passage");
+                            " s is after the last recorded time " + general(times.back().t, 6) + " s: no first passage");
       }
       std::string why_not;
       grp.spectrum = spectrum_of(runs, group_config(in, a, i), s.spectrum_transient, why_not);

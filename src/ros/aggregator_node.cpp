@@ -39,11 +39,17 @@ bool AggregatorNode::run() {
     ReadOptions options;
     options.series_csv = (std::filesystem::path(report_folder_) / "series.csv").string();
     options.series_mu = settings_.series_mu;
+    // The stochastic runs' series are reduced as they are read, not kept (doc/gear_aggregator.md §8).
+    SeriesDigests series(settings_.analysis);
+    options.on_series = [&series](const BatchInputs& in, const RunRecord& run, const std::vector<double>& t,
+                                  const std::vector<double>& delta, const std::vector<double>& delta_dot) {
+      series.add(in, run, t, delta, delta_dot);
+    };
     const BatchInputs inputs = read_batches(settings_.folders, options);
     StudyAnalysis study;  // per point and axis (doc/studies.md); the mu sweep's analysis is analyse()'s
     const BatchAnalysis analysis = analyse_batch(inputs, settings_.analysis, study);
     // Safety over time, first passage, spectrum band, KDEs: the dynamics layer, above the report's.
-    const BatchOverTime over_time = analyse_over_time(inputs, analysis);
+    const BatchOverTime over_time = analyse_over_time(inputs, analysis, series);
     for (const std::string& note : over_time.notes) ROS_WARN("gear_aggregator: %s", note.c_str());
     std::vector<std::string> written;
     const std::string sections = write_over_time(report_folder_, inputs, analysis, over_time, written);

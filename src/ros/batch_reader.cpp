@@ -7,6 +7,7 @@
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <yaml-cpp/eventhandler.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -15,6 +16,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -85,13 +87,75 @@ std::string first_difference(const std::string& a, const std::string& b) {
 
 bool same(double a, double b) { return std::abs(a - b) <= 1e-12 * std::max(1.0, std::abs(b)); }
 
+// Checks a YAML text's syntax without building yaml-cpp's tree (throws YAML::ParserException).
+class SyntaxOnly : public YAML::EventHandler {
+ public:
+  void OnDocumentStart(const YAML::Mark&) override {}
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t, const std::string&) override {}
+  void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {}
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {}
+  void OnMapEnd() override {}
+};
+
+// A manifest's text split into its top-level `runs:` block sequence, one text per item (each
+// parsed alone as `runs:` + item), and the rest with `runs:` left empty: yaml-cpp's tree of a
+// whole manifest costs about 5 kB per run (34 MB for the 6390 runs of R = 1000). False if the
+// text has no such block (then it is parsed whole).
+bool split_runs(const std::string& text, std::string& rest, std::vector<std::string>& items) {
+  std::istringstream in(text);
+  std::string line;
+  std::size_t indent = std::string::npos;  // of the items' "-"
+  bool inside = false, found = false;
+  while (std::getline(in, line)) {
+    if (!inside && line.rfind("runs:", 0) == 0 && line.find_first_not_of(' ', 5) == std::string::npos) {
+      inside = found = true;
+      rest += line + '\n';
+      continue;
+    }
+    if (inside) {
+      const std::size_t first = line.find_first_not_of(' ');
+      if (first == std::string::npos || line[first] == '#') {  // blank or comment: to the item in hand
+        if (!items.empty()) items.back() += line + '\n';
+        continue;
+      }
+      const bool dash = line[first] == '-' && (first + 1 == line.size() || line[first + 1] == ' ');
+      if (indent == std::string::npos) {
+        if (!dash) return false;  // not a block sequence
+        indent = first;
+      }
+      if (first > indent || (first == indent && dash)) {  // an item's line, or a new item
+        if (first == indent && dash) items.emplace_back();
+        items.back() += line + '\n';
+        continue;
+      }
+      inside = false;  // the next top-level key
+    }
+    rest += line + '\n';
+  }
+  return found && indent != std::string::npos;
+}
+
 Manifest parse_manifest(const fs::path& path) {
   const auto fail = [&](const std::string& why) -> void { throw BatchReadError("manifest " + path.string() + ": " + why); };
   Manifest m;
   m.path = path;
   YAML::Node root;
+  std::vector<std::string> items;  // the runs, if split_runs could split them off
   try {
-    root = YAML::LoadFile(path.string());
+    std::ifstream file(path);
+    if (!file) throw YAML::BadFile(path.string());
+    std::ostringstream text;
+    text << file.rdbuf();
+    std::istringstream syntax(text.str());
+    YAML::Parser parser(syntax);
+    SyntaxOnly ignore;
+    parser.HandleNextDocument(ignore);  // the whole text's syntax errors first, as one tree's
+    std::string rest;
+    root = YAML::Load(split_runs(text.str(), rest, items) ? rest : text.str());
   } catch (const YAML::Exception& ex) {
     fail(std::string("not readable as YAML: ") + ex.what());
   }
@@ -139,8 +203,9 @@ Manifest parse_manifest(const fs::path& path) {
            std::to_string(m.shard_count));
     const YAML::Node runs = root["runs"];
     if (!runs || !(runs.IsSequence() || runs.IsNull())) fail("runs must be a list");
-    for (std::size_t i = 0; runs.IsSequence() && i < runs.size(); ++i) {
-      const YAML::Node r = runs[i];
+    const std::size_t count = items.empty() ? (runs.IsSequence() ? runs.size() : 0) : items.size();
+    for (std::size_t i = 0; i < count; ++i) {
+      const YAML::Node r = items.empty() ? runs[i] : YAML::Load("runs:\n" + items[i])["runs"][0];
       ManifestRun e;
       e.name = r["name"].as<std::string>();
       e.file = r["file"].as<std::string>();
@@ -264,9 +329,9 @@ std::vector<std::uint8_t> serialize(const BagContents& c) {
   return buf;
 }
 
-BagContents deserialize(std::vector<std::uint8_t>& buf) {
+BagContents deserialize(std::uint8_t* data, std::uint32_t size) {
   BagContents c;
-  ros::serialization::IStream in(buf.data(), static_cast<std::uint32_t>(buf.size()));
+  ros::serialization::IStream in(data, size);
   fields(in, c);
   return c;
 }
@@ -292,9 +357,18 @@ struct BagJob {
 
 // What came of reading one bag: its contents, or why not.
 struct BagRead {
-  std::optional<BagContents> contents;
+  std::unique_ptr<BagContents> contents;  // not inline: a round holds one BagRead per bag
   std::string error;
 };
+
+// Held by a reader thread while it forks a child and while it handles what came through its pipe:
+// so `take` calls come one at a time, and no reader thread allocates while another forks (a
+// child forked then could inherit a locked allocator; seen under ASan, whose allocator has no
+// fork handler here).
+std::mutex reader_lock;
+
+// Takes the contents of job i's bag as its frame arrives (from the reader threads, one at a time).
+using TakeBag = std::function<void(std::size_t, BagRead&)>;
 
 // The child of read_bags_in_child: reads jobs[first...] and sends a frame per bag into the pipe,
 // then _exit (no destructors, no atexit).
@@ -326,8 +400,10 @@ struct BagRead {
 // bags because forks are dear here (a child per bag made reading 990 bags 7x slower). The child
 // sends a frame per bag: index (4 bytes), status (1: 0 contents, 1 Skip, 2 other error), payload
 // length (4) and payload (the serialized contents or the message); the parent takes each frame
-// as it arrives, so no more than one bag's frame is buffered.
-std::vector<BagRead> read_bags_in_child(const std::vector<BagJob>& jobs) {
+// as it arrives, so no more than one bag's frame is buffered, and hands a frame with contents to
+// `take` at once (index into `jobs`); the others stay in the result.
+std::vector<BagRead> read_bags_in_child(const std::vector<BagJob>& jobs, const TakeBag& take) {
+  std::exception_ptr take_error;  // from `take`: rethrown once the child has ended
   std::vector<BagRead> out(jobs.size());
   std::vector<bool> done(jobs.size(), false);
   std::size_t first = 0;
@@ -338,8 +414,7 @@ std::vector<BagRead> read_bags_in_child(const std::vector<BagJob>& jobs) {
       // Another reader thread forking between this pipe's creation and the close of its write
       // end below would give its child a copy of that end, and this pipe's end of file would then
       // wait for that child as well.
-      static std::mutex forking;
-      std::lock_guard<std::mutex> lock(forking);
+      std::lock_guard<std::mutex> lock(reader_lock);
       if (::pipe2(fds, O_CLOEXEC) != 0)
         throw BatchReadError(std::string("cannot read bags: pipe: ") + std::strerror(errno));
       pid = ::fork();
@@ -358,13 +433,17 @@ std::vector<BagRead> read_bags_in_child(const std::vector<BagJob>& jobs) {
         std::memcpy(&index, &data[at], 4);
         std::memcpy(&size, &data[at + 5], 4);
         if (index >= jobs.size() || at + 9 + size > data.size()) break;
-        std::vector<std::uint8_t> payload(data.begin() + static_cast<std::ptrdiff_t>(at + 9),
-                                          data.begin() + static_cast<std::ptrdiff_t>(at + 9 + size));
+        std::uint8_t* payload = &data[at + 9];
         const std::uint8_t status = data[at + 4];
         if (status == 0) {
-          out[index].contents = deserialize(payload);
+          out[index].contents = std::make_unique<BagContents>(deserialize(payload, size));
+          try {
+            if (!take_error) take(index, out[index]);
+          } catch (...) {
+            take_error = std::current_exception();
+          }
         } else {
-          const std::string what(payload.begin(), payload.end());
+          const std::string what(payload, payload + size);
           out[index].error = status == 1 ? what : "unreadable bag (truncated or corrupted): " + what;
         }
         done[index] = true;
@@ -378,6 +457,7 @@ std::vector<BagRead> read_bags_in_child(const std::vector<BagJob>& jobs) {
       const ssize_t n = ::read(fds[0], chunk, sizeof chunk);
       if (n < 0 && errno == EINTR) continue;
       if (n <= 0) break;
+      std::lock_guard<std::mutex> lock(reader_lock);
       data.insert(data.end(), chunk, chunk + n);
       take_frames();
     }
@@ -385,6 +465,7 @@ std::vector<BagRead> read_bags_in_child(const std::vector<BagJob>& jobs) {
     int wstatus = 0;
     while (::waitpid(pid, &wstatus, 0) < 0 && errno == EINTR) {
     }
+    if (take_error) std::rethrow_exception(take_error);
     while (first < jobs.size() && done[first]) ++first;
     if (first == jobs.size()) break;
     // The bag in hand when the child ended.
@@ -399,8 +480,9 @@ std::vector<BagRead> read_bags_in_child(const std::vector<BagJob>& jobs) {
 }
 
 // The bags read by one child per core at once (read_bags_in_child; bag i goes to reader
-// i mod readers), each child's pipe drained by a thread of its own.
-std::vector<BagRead> read_bags_isolated(const std::vector<BagJob>& jobs) {
+// i mod readers), each child's pipe drained by a thread of its own, which hands each bag's contents
+// to `take` (index into `jobs`; one call at a time) as they arrive.
+std::vector<BagRead> read_bags_isolated(const std::vector<BagJob>& jobs, const TakeBag& take) {
   const std::size_t readers =
       std::min<std::size_t>(std::max(1u, std::thread::hardware_concurrency()), std::max<std::size_t>(1, jobs.size()));
   std::vector<std::vector<BagJob>> part(readers);
@@ -408,14 +490,18 @@ std::vector<BagRead> read_bags_isolated(const std::vector<BagJob>& jobs) {
   std::vector<std::vector<BagRead>> read(readers);
   std::vector<std::exception_ptr> error(readers);
   std::vector<std::thread> threads;
+  std::unique_lock<std::mutex> starting(reader_lock);  // no thread forks while this one allocates
   for (std::size_t r = 0; r < readers; ++r)
     threads.emplace_back([&, r] {
       try {
-        read[r] = read_bags_in_child(part[r]);
+        read[r] = read_bags_in_child(part[r], [&](std::size_t i, BagRead& bag) {
+          take(i * readers + r, bag);
+        });
       } catch (...) {
         error[r] = std::current_exception();
       }
     });
+  starting.unlock();
   for (std::thread& t : threads) t.join();
   for (const std::exception_ptr& e : error)
     if (e) std::rethrow_exception(e);
@@ -456,8 +542,8 @@ class ParametersCache {
   std::map<std::string, ParsedParameters> parsed_;
 };
 
-// The run record of bag `read` of run `e`, if it is that run of this batch (its series moved out of
-// `read`); else throws Skip.
+// The run record of bag `read` of run `e`, if it is that run of this batch (its Poincaré points
+// moved out of `read`); else throws Skip.
 RunRecord check_run(BagRead& read, const ManifestRun& e, const Manifest& manifest, ParametersCache& parameters) {
   const auto require = [](bool ok, const std::string& why) {
     if (!ok) throw Skip(why);
@@ -519,9 +605,6 @@ RunRecord check_run(BagRead& read, const ManifestRun& e, const Manifest& manifes
   r.snapshot_times = summary->snapshot_times;
   r.snapshot_delta = summary->snapshot_delta;
   r.snapshot_delta_dot = summary->snapshot_delta_dot;
-  r.series_times = std::move(bag.t);
-  r.series_delta = std::move(bag.delta);
-  r.series_delta_dot = std::move(bag.delta_dot);
   r.section_times = std::move(bag.section_t);
   r.section_delta = std::move(bag.section_delta);
   r.section_delta_dot = std::move(bag.section_delta_dot);
@@ -631,7 +714,7 @@ BatchInputs read_batches(const std::vector<std::string>& folder_args, const Read
     fs::path folder, file;
     bool tried = false;
     std::optional<RunRecord> record;
-    std::string rows, reason;  // its series rows, or why it is not usable
+    std::string rows, reason;  // the file holding its series rows (if any), or why it is not usable
   };
   std::map<std::string, std::vector<Candidate>> candidates;
   ParametersCache parameters;
@@ -654,25 +737,41 @@ BatchInputs read_batches(const std::vector<std::string>& folder_args, const Read
       for (Candidate& c : list) {
         if (c.record) break;
         if (c.tried) continue;
-        // Every stochastic run's states: safety over time, first passage and the spectrum
-        // (doc/gear_aggregator.md §5).
-        jobs.push_back({c.file, wants_series ? &e : nullptr, e.kind == RunKind::Stochastic});
+        // Every stochastic run's states, for options.on_series: safety over time, first passage
+        // and the spectrum (doc/gear_aggregator.md §5).
+        jobs.push_back({c.file, wants_series ? &e : nullptr, options.on_series && e.kind == RunKind::Stochastic});
         round.emplace_back(&c, &entry);
         break;
       }
     }
     if (jobs.empty()) break;
-    std::vector<BagRead> reads = read_bags_isolated(jobs);
-    for (std::size_t i = 0; i < reads.size(); ++i) {
+    // Each bag as it arrives: checked, its series handed to options.on_series, then dropped, so
+    // that no more than one bag's series per reader is held at a time.
+    const auto take = [&](std::size_t i, BagRead& read) {
       Candidate& c = *round[i].first;
       c.tried = true;
       try {
-        c.record = check_run(reads[i], round[i].second->first, *round[i].second->second, parameters);
-        c.rows = std::move(reads[i].contents->series);
-        reads[i].contents.reset();
+        c.record = check_run(read, round[i].second->first, *round[i].second->second, parameters);
+        BagContents& bag = *read.contents;
+        if (!bag.series.empty()) {  // to a file of its own until series.csv is written in the listed order
+          c.rows = options.series_csv + "." + round[i].second->first.name + ".part";
+          std::ofstream part(c.rows, std::ios::binary);
+          part << bag.series;
+          if (!part.flush()) throw BatchReadError("cannot write " + c.rows);
+        }
+        if (options.on_series && c.record->kind == RunKind::Stochastic && !bag.t.empty())
+          options.on_series(in, *c.record, bag.t, bag.delta, bag.delta_dot);
       } catch (const Skip& ex) {
         c.reason = ex.what();
       }
+      read.contents.reset();
+    };
+    const std::vector<BagRead> reads = read_bags_isolated(jobs, take);
+    for (std::size_t i = 0; i < reads.size(); ++i) {
+      Candidate& c = *round[i].first;
+      if (c.tried) continue;
+      c.tried = true;
+      c.reason = reads[i].error;  // unreadable: no contents came
     }
   }
   std::map<fs::path, std::size_t> usable;  // runs each folder provides
@@ -686,7 +785,10 @@ BatchInputs read_batches(const std::vector<std::string>& folder_args, const Read
         in.runs.push_back(std::move(*c.record));
         used = c.file.string();
         ++usable[c.folder];
-        series << c.rows;
+        if (!c.rows.empty()) {
+          series << std::ifstream(c.rows, std::ios::binary).rdbuf();
+          fs::remove(c.rows);
+        }
       } else {
         skip(c.file, c.reason);
       }

@@ -360,3 +360,61 @@ TEST_F(BatchReader, BatchCompleteWaitsForEveryListedBag) {
   fs::rename(root_ / "a" / (runs[3].name + ".bag"), root_ / "a" / (runs[3].name + ".bag.active"));
   EXPECT_FALSE(gd::batch_complete((root_ / "a").string()));
 }
+
+// The reader parses a manifest's runs item by item (no yaml-cpp tree of the whole list): block
+// items indented (YAML::Dump's), block items at column 0 between comments and blank lines, and a
+// flow list (parsed whole) read the same runs; each stochastic run's series goes to on_series once
+// as its bag is read, with its 401 states.
+TEST_F(BatchReader, ManifestStylesReadTheSameRunsAndSeriesStreamOut) {
+  const auto runs = all_runs();
+  write_batch(root_ / "a", runs, config_);
+  std::ifstream in_file(root_ / "a" / "manifest.yaml");
+  const std::string dumped((std::istreambuf_iterator<char>(in_file)), std::istreambuf_iterator<char>());
+  const std::size_t at = dumped.find("\nruns:\n");
+  ASSERT_NE(at, std::string::npos);
+  const std::string head = dumped.substr(0, at + 1);
+  std::string column0 = head + "runs:\n# the runs\n", flow = head + "runs: [";
+  for (const RunSpec& r : runs) {
+    char mu[32];
+    std::snprintf(mu, sizeof mu, "%.17g", r.mu);
+    column0 += "- name: " + r.name + "\n  kind: " + gd::to_string(r.kind) + "\n  mu: " + mu + "\n\n  realization: " +
+               std::to_string(r.index) + "\n  file: " + r.name + ".bag\n";
+    flow += std::string(&r == &runs.front() ? "" : ", ") + "{name: " + r.name + ", kind: " + gd::to_string(r.kind) +
+            ", mu: " + mu + ", realization: " + std::to_string(r.index) + ", file: " + r.name + ".bag}";
+  }
+  flow += "]\n";
+  const auto names_of = [](const gd::BatchInputs& in) {
+    std::vector<std::string> names;
+    for (const gd::RunRecord& r : in.runs) names.push_back(r.name + "/" + gd::to_string(r.kind) + "/" + std::to_string(r.index));
+    return names;
+  };
+  std::size_t series_runs = 0, states = 0;
+  gd::ReadOptions options;
+  options.on_series = [&](const gd::BatchInputs&, const gd::RunRecord& run, const std::vector<double>& t,
+                          const std::vector<double>& delta, const std::vector<double>& delta_dot) {
+    EXPECT_EQ(run.kind, gd::RunKind::Stochastic);
+    EXPECT_EQ(delta.size(), t.size());
+    EXPECT_EQ(delta_dot.size(), t.size());
+    ++series_runs;
+    states += t.size();
+  };
+  const gd::BatchInputs reference = gd::read_batches({(root_ / "a").string()}, options);
+  EXPECT_EQ(series_runs, 12u);
+  EXPECT_EQ(states, 12u * 401);
+  ASSERT_EQ(reference.runs.size(), runs.size());
+  for (const std::string& text : {column0, flow}) {
+    std::ofstream(root_ / "a" / "manifest.yaml") << text;
+    const gd::BatchInputs in = gd::read_batches({(root_ / "a").string()});
+    EXPECT_EQ(names_of(in), names_of(reference)) << text;
+    EXPECT_TRUE(in.skipped.empty()) << text;
+    EXPECT_EQ(in.expected_runs, runs.size());
+  }
+  // A syntax error in one item is the whole manifest's, reported as before.
+  std::ofstream(root_ / "a" / "manifest.yaml") << column0 << "- {name: [unclosed\n";
+  try {
+    gd::read_batches({(root_ / "a").string()});
+    ADD_FAILURE() << "a broken manifest was read";
+  } catch (const gd::BatchReadError& ex) {
+    EXPECT_HAS(std::string(ex.what()), "not readable as YAML");
+  }
+}

@@ -29,9 +29,6 @@ struct RunRecord {
   bool reached_steady_state = false;  // t_ss < T
   double final_delta = 0, final_delta_dot = 0, final_phi = 0;  // at T [m], [m/s], [m/s^2]
   std::vector<double> snapshot_times, snapshot_delta, snapshot_delta_dot;  // [s], [m], [m/s]
-  // The recorded /gear/state series of a stochastic run (empty for the others): every state at
-  // sparse_record_rate, or at record_rate for the dense realizations. [s], [m], [m/s]
-  std::vector<double> series_times, series_delta, series_delta_dot;
   // The /gear/poincare section of a deterministic run (S1, phase): (delta, delta_dot) at mesh
   // phase 0 once per mesh period; empty for stochastic runs and in bags written before it was
   // recorded (doc/batch-folder.md §5). [s], [m], [m/s]

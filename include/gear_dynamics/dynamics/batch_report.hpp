@@ -6,8 +6,10 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "gear_dynamics/analysis/report.hpp"
@@ -63,10 +65,53 @@ struct BatchOverTime {
   std::vector<std::string> notes;     // what could not be computed, and why
 };
 
-BatchOverTime analyse_over_time(const BatchInputs& inputs, const BatchAnalysis& analysis);
+// What the analyses over time keep of the stochastic runs' state series, reduced as each run is
+// read so that no series is kept (the aggregator's memory does not grow with their length):
+// per group, the safety counters at the times every realization of it recorded so far; per run,
+// its stretches outside the safe set (first passage), its sample rate and, for a series dense
+// enough for the spectrum, its Welch PSD. The result does not depend on the order of add().
+class SeriesDigests {
+ public:
+  explicit SeriesDigests(const AnalysisSettings& settings) : settings_(settings) {}
 
-// The realizations' series on the times all of them recorded (within 1e-9 s).
-RecordedRuns common_series(const std::vector<const RunRecord*>& runs);
+  // One stochastic run's /gear/state series [s], [m], [m/s] (non-empty, ascending times); `in`
+  // gives the model of the run's group (its study point). Throws std::invalid_argument on series
+  // of different lengths.
+  void add(const BatchInputs& in, const RunRecord& run, const std::vector<double>& time,
+           const std::vector<double>& delta, const std::vector<double>& delta_dot);
+
+  // A recorded time with how many of the group's runs were inside the intervals there.
+  struct Time {
+    double t = 0;  // the value of the shortest series (the first by realization among equals)
+    std::size_t samples_of = 0;  // that series' length, and its realization
+    std::uint32_t realization_of = 0;
+    std::size_t joint = 0, delta = 0, velocity = 0;
+  };
+  struct Group {
+    std::size_t runs = 0;
+    double top_rate = 0;  // the highest sample rate of its runs so far: only those have a PSD
+    std::vector<Time> times;  // the times all its runs recorded (within 1e-9 s), ascending
+  };
+  struct Run {
+    double mu = 0;
+    std::size_t point = 0;
+    std::uint32_t realization = 0;
+    std::vector<double> outside;  // [start, end] pairs: maximal stretches of samples outside the safe set
+    double sample_rate = 0;       // (n - 1) / (t_last - t_first) [Hz]
+    std::optional<Psd> psd;       // if the series is dense enough for the spectrum and of the group's top rate
+  };
+  // Groups keyed by (mu, point): one group of the report either way (mu sweep or study).
+  const std::map<std::pair<double, std::size_t>, Group>& groups() const { return groups_; }
+  const std::vector<Run>& runs() const { return runs_; }
+
+ private:
+  AnalysisSettings settings_;
+  std::map<std::pair<double, std::size_t>, Group> groups_;
+  std::vector<Run> runs_;
+  std::map<std::size_t, std::pair<double, double>> mesh_frequency_duration_;  // per point
+};
+
+BatchOverTime analyse_over_time(const BatchInputs& inputs, const BatchAnalysis& analysis, const SeriesDigests& series);
 
 // Writes safety_over_time.csv, first_passage.csv, survival.csv, spectrum_band.csv,
 // spectrum_peaks.csv, spectrum_info.csv, poincare.csv and (with analysis.kde) kde.csv, in the paper's units;

@@ -4,6 +4,7 @@
 // warning naming the file and the reason; listed runs without a usable bag are reported missing.
 #pragma once
 
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -25,6 +26,13 @@ struct ReadOptions {
   // as CSV in the paper's units (for Figs. 5-7); empty: no series are read.
   std::string series_csv;
   double series_mu = 0.04;
+  // Called with each stochastic run's /gear/state series [s], [m], [m/s] as its bag is read and
+  // found to be that run (`inputs` holds the batch's configuration and points; its runs are not
+  // read yet), so the series can be reduced instead of kept (SeriesDigests). Calls come from the
+  // reader threads one at a time. Unset: the states are not read.
+  std::function<void(const BatchInputs& inputs, const RunRecord& run, const std::vector<double>& time,
+                     const std::vector<double>& delta, const std::vector<double>& delta_dot)>
+      on_series;
 };
 
 // Reads and merges the folders (shards of one batch, or one folder several shards wrote into).
