@@ -22,6 +22,25 @@ constexpr std::array<double, 9> kCosTaylor = {1.0 / 20922789888000, -1.0 / 87178
 // Philox4x32-10 (Salmon et al. 2011) constants, as in Random123's philox.h.
 constexpr std::uint32_t kPhiloxM0 = 0xD2511F53u, kPhiloxM1 = 0xCD9E8D57u;
 constexpr std::uint32_t kPhiloxW0 = 0x9E3779B9u, kPhiloxW1 = 0xBB67AE85u;
+constexpr std::uint64_t kLow = 0xFFFFFFFFull;  // a 32-bit word held in 64 bits
+
+// Philox4x32-10 of one counter (p, p >> 32, seed_high, 0) with key (k0, k1), as the words
+// w0 = out[1]:out[0] and w1 = out[3]:out[2]: the reference the SIMD paths must equal.
+inline void philox_one(std::uint64_t p, std::uint32_t seed_high, std::uint32_t k0, std::uint32_t k1,
+                       std::uint64_t& w0, std::uint64_t& w1) {
+  std::uint64_t c0 = p & kLow, c1 = p >> 32, c2 = seed_high, c3 = 0u;
+  for (int round = 0; round < 10; ++round) {
+    const std::uint64_t p0 = c0 * kPhiloxM0, p1 = c2 * kPhiloxM1;
+    c0 = (p1 >> 32) ^ c1 ^ k0;
+    c1 = p1 & kLow;
+    c2 = (p0 >> 32) ^ c3 ^ k1;
+    c3 = p0 & kLow;
+    k0 += kPhiloxW0;
+    k1 += kPhiloxW1;
+  }
+  w0 = (c1 << 32) | c0;
+  w1 = (c3 << 32) | c2;
+}
 
 }  // namespace
 
@@ -39,7 +58,6 @@ void NormalStream::philox(std::uint64_t first_pair, std::uint64_t* w0, std::uint
   // 32 x 32 -> 64 bit products into slow 64-bit vector multiplies, hence the AVX-512 path;
   // both paths are integer arithmetic, so they agree bit for bit (test_random checks both
   // against r123::Philox4x32).
-  constexpr std::uint64_t kLow = 0xFFFFFFFFull;
   int i = 0;
 #ifdef __AVX512F__
   // kGroups vectors of 8 counters advance together: the rounds are a latency chain, and
@@ -77,22 +95,8 @@ void NormalStream::philox(std::uint64_t first_pair, std::uint64_t* w0, std::uint
     }
   }
 #endif
-  for (; i < kBlockPairs; ++i) {
-    const std::uint64_t p = first_pair + static_cast<std::uint64_t>(i);
-    std::uint64_t c0 = p & kLow, c1 = p >> 32, c2 = seed_high_, c3 = 0u;
-    std::uint32_t k0 = key_[0], k1 = key_[1];
-    for (int round = 0; round < 10; ++round) {
-      const std::uint64_t p0 = c0 * kPhiloxM0, p1 = c2 * kPhiloxM1;
-      c0 = (p1 >> 32) ^ c1 ^ k0;
-      c1 = p1 & kLow;
-      c2 = (p0 >> 32) ^ c3 ^ k1;
-      c3 = p0 & kLow;
-      k0 += kPhiloxW0;
-      k1 += kPhiloxW1;
-    }
-    w0[i] = (c1 << 32) | c0;
-    w1[i] = (c3 << 32) | c2;
-  }
+  for (; i < kBlockPairs; ++i)
+    philox_one(first_pair + static_cast<std::uint64_t>(i), seed_high_, key_[0], key_[1], w0[i], w1[i]);
 }
 
 namespace {
@@ -182,7 +186,6 @@ void NormalLanes::block(std::uint64_t first_pair, double* out, std::ptrdiff_t st
   static_assert(kBlockPairs % kGroups == 0);
   for (int i = 0; i < kBlockPairs; i += kGroups) {
     alignas(64) std::uint64_t w0[kGroups][kLanes], w1[kGroups][kLanes];
-    constexpr std::uint64_t kLow = 0xFFFFFFFFull;
 #ifdef __AVX512F__
     // NormalStream::philox with the counter the same in every lane and the keys per lane.
     const __m512i low = _mm512_set1_epi64(static_cast<long long>(kLow));
@@ -219,22 +222,9 @@ void NormalLanes::block(std::uint64_t first_pair, double* out, std::ptrdiff_t st
     }
 #else
     for (int g = 0; g < kGroups; ++g) {
-      for (int l = 0; l < kLanes; ++l) {
-        const std::uint64_t p = first_pair + static_cast<std::uint64_t>(i + g);
-        std::uint64_t c0 = p & kLow, c1 = p >> 32, c2 = seed_high_[l], c3 = 0u;
-        std::uint32_t k0 = key0_[l], k1 = key1_[l];
-        for (int round = 0; round < 10; ++round) {
-          const std::uint64_t p0 = c0 * kPhiloxM0, p1 = c2 * kPhiloxM1;
-          c0 = (p1 >> 32) ^ c1 ^ k0;
-          c1 = p1 & kLow;
-          c2 = (p0 >> 32) ^ c3 ^ k1;
-          c3 = p0 & kLow;
-          k0 += kPhiloxW0;
-          k1 += kPhiloxW1;
-        }
-        w0[g][l] = (c1 << 32) | c0;
-        w1[g][l] = (c3 << 32) | c2;
-      }
+      for (int l = 0; l < kLanes; ++l)
+        philox_one(first_pair + static_cast<std::uint64_t>(i + g), seed_high_[l], key0_[l], key1_[l], w0[g][l],
+                   w1[g][l]);
     }
 #endif
     alignas(64) double first[kGroups][kLanes], second[kGroups][kLanes];
