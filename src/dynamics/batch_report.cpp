@@ -26,20 +26,12 @@ constexpr double U = kToPaperUnits;
 constexpr double kTimeMatch = 1e-9;  // [s] series times are n h, as the snapshot times
 constexpr std::size_t kKdePoints = 201;
 
-// The stochastic realizations of group i of the analysis: by mu in the mu sweep, by point in a study.
-std::vector<const RunRecord*> group_runs(const BatchInputs& in, const BatchAnalysis& a, std::size_t i) {
+// The runs of one kind (stochastic realizations by r, phase runs by j) in group i of the analysis:
+// by mu in the mu sweep, by point in a study.
+std::vector<const RunRecord*> group_runs(const BatchInputs& in, const BatchAnalysis& a, std::size_t i, RunKind kind) {
   std::vector<const RunRecord*> out;
   for (const RunRecord& r : in.runs)
-    if (r.kind == RunKind::Stochastic && (a.keys.empty() ? r.mu == a.mu[i].mu : r.point == i)) out.push_back(&r);
-  std::sort(out.begin(), out.end(), [](const RunRecord* x, const RunRecord* y) { return x->index < y->index; });
-  return out;
-}
-
-// The phase runs of group i, by phase index j.
-std::vector<const RunRecord*> group_phase_runs(const BatchInputs& in, const BatchAnalysis& a, std::size_t i) {
-  std::vector<const RunRecord*> out;
-  for (const RunRecord& r : in.runs)
-    if (r.kind == RunKind::Phase && (a.keys.empty() ? r.mu == a.mu[i].mu : r.point == i)) out.push_back(&r);
+    if (r.kind == kind && (a.keys.empty() ? r.mu == a.mu[i].mu : r.point == i)) out.push_back(&r);
   std::sort(out.begin(), out.end(), [](const RunRecord* x, const RunRecord* y) { return x->index < y->index; });
   return out;
 }
@@ -264,7 +256,7 @@ BatchOverTime analyse_over_time(const BatchInputs& in, const BatchAnalysis& a, c
   BatchOverTime out;
   for (std::size_t i = 0; i < a.mu.size(); ++i) {
     const std::string label = a.keys.empty() ? "mu = " + general(a.mu[i].mu, 6) : "point " + a.keys[i];
-    const std::vector<const RunRecord*> all = group_runs(in, a, i);
+    const std::vector<const RunRecord*> all = group_runs(in, a, i, RunKind::Stochastic);
     std::vector<const SeriesDigests::Run*> runs;  // the realizations with a series, by index
     for (const SeriesDigests::Run& r : digests.runs())
       if (a.keys.empty() ? r.mu == a.mu[i].mu : r.point == i) runs.push_back(&r);
@@ -323,7 +315,7 @@ BatchOverTime analyse_over_time(const BatchInputs& in, const BatchAnalysis& a, c
       grp.kde_delta_dot = kde_of(all, &RunRecord::final_delta_dot, s.delta_dot_bins);
     }
     std::string why_no_section;
-    grp.section = section_of(group_phase_runs(in, a, i), s.poincare_transient, why_no_section);
+    grp.section = section_of(group_runs(in, a, i, RunKind::Phase), s.poincare_transient, why_no_section);
     if (!why_no_section.empty()) out.notes.push_back(label + ": Poincaré section: " + why_no_section);
     out.groups.push_back(std::move(grp));
   }
