@@ -1,34 +1,26 @@
 #include "gear_dynamics/engine/normal_stream.hpp"
 
-#include <Eigen/Core>
+#include <boost/random/normal_distribution.hpp>
 #include <immintrin.h>
 #include <algorithm>
-#include <array>
-#include <cmath>
 
 namespace gear_dynamics {
 
 namespace {
 
 constexpr int kBlockPairs = NormalStream::kBlockPairs;
-constexpr double kQuarterPi = 0.78539816339744830962;
-// Taylor coefficients of sin(t) / t and cos(t) in t^2, highest first; on |t| <= pi/4 the first
-// omitted terms are below 5e-17.
-constexpr std::array<double, 8> kSinTaylor = {-1.0 / 1307674368000, 1.0 / 6227020800, -1.0 / 39916800,
-                                              1.0 / 362880, -1.0 / 5040, 1.0 / 120, -1.0 / 6, 1.0};
-constexpr std::array<double, 9> kCosTaylor = {1.0 / 20922789888000, -1.0 / 87178291200, 1.0 / 479001600,
-                                              -1.0 / 3628800, 1.0 / 40320, -1.0 / 720, 1.0 / 24, -0.5, 1.0};
 
 // Philox4x32-10 (Salmon et al. 2011) constants, as in Random123's philox.h.
 constexpr std::uint32_t kPhiloxM0 = 0xD2511F53u, kPhiloxM1 = 0xCD9E8D57u;
 constexpr std::uint32_t kPhiloxW0 = 0x9E3779B9u, kPhiloxW1 = 0xBB67AE85u;
 constexpr std::uint64_t kLow = 0xFFFFFFFFull;  // a 32-bit word held in 64 bits
 
-// Philox4x32-10 of one counter (p, p >> 32, seed_high, 0) with key (k0, k1), as the words
-// w0 = out[1]:out[0] and w1 = out[3]:out[2]: the reference the SIMD paths must equal.
-inline void philox_one(std::uint64_t p, std::uint32_t seed_high, std::uint32_t k0, std::uint32_t k1,
-                       std::uint64_t& w0, std::uint64_t& w1) {
-  std::uint64_t c0 = p & kLow, c1 = p >> 32, c2 = seed_high, c3 = 0u;
+// Philox4x32-10 of one counter (p, p >> 32, seed_high, c3) with key (k0, k1), as the words
+// w0 = out[1]:out[0] and w1 = out[3]:out[2]: the reference the SIMD paths must equal (c3 = 0), and
+// the retry words of the ziggurat's slow path (c3 > 0).
+inline void philox_one(std::uint64_t p, std::uint32_t seed_high, std::uint32_t c3_word, std::uint32_t k0,
+                       std::uint32_t k1, std::uint64_t& w0, std::uint64_t& w1) {
+  std::uint64_t c0 = p & kLow, c1 = p >> 32, c2 = seed_high, c3 = c3_word;
   for (int round = 0; round < 10; ++round) {
     const std::uint64_t p0 = c0 * kPhiloxM0, p1 = c2 * kPhiloxM1;
     c0 = (p1 >> 32) ^ c1 ^ k0;
@@ -40,6 +32,85 @@ inline void philox_one(std::uint64_t p, std::uint32_t seed_high, std::uint32_t k
   }
   w0 = (c1 << 32) | c0;
   w1 = (c3 << 32) | c2;
+}
+
+// The 64-bit engine Boost.Random's normal_distribution draws normal k = 2p + j of a stream from:
+// first the main word (word j of counter (p, p >> 32, seed_high, 0)), then, should the ziggurat
+// reject or fall into the tail, the words of the retry counters (p, p >> 32, seed_high, 1 + j + 2m)
+// for m = 0, 1, ..., each giving w0 then w1. The retry words are computed only when asked for.
+class ReplayEngine {
+ public:
+  using result_type = std::uint64_t;
+  static constexpr result_type min() { return 0; }
+  static constexpr result_type max() { return ~result_type{0}; }
+
+  ReplayEngine(std::uint64_t main_word, std::uint64_t p, int j, std::uint32_t seed_high, std::uint32_t k0,
+               std::uint32_t k1)
+      : main_word_(main_word), p_(p), seed_high_(seed_high), k0_(k0), k1_(k1), next_c3_(1u + static_cast<unsigned>(j)) {}
+
+  result_type operator()() {
+    if (drawn_ == 0) {
+      drawn_ = 1;
+      return main_word_;
+    }
+    if (drawn_ % 2 == 1) {
+      philox_one(p_, seed_high_, next_c3_, k0_, k1_, retry_[0], retry_[1]);
+      next_c3_ += 2;
+    }
+    return retry_[(drawn_++ - 1) % 2];
+  }
+
+ private:
+  std::uint64_t main_word_, p_;
+  std::uint32_t seed_high_, k0_, k1_, next_c3_;
+  std::uint64_t retry_[2] = {0, 0};
+  unsigned drawn_ = 0;
+};
+
+// Normal 2p + j of the stream with key (k0, k1) and seed_high whose main word is `word`: the slow
+// path, Boost.Random's ziggurat in full (it repeats the fast test on `word` and goes on from there).
+double boost_normal(std::uint64_t word, std::uint64_t p, int j, std::uint32_t seed_high, std::uint32_t k0,
+                    std::uint32_t k1) {
+  ReplayEngine engine(word, p, j, seed_high, k0, k1);
+  return boost::random::normal_distribution<double>(0.0, 1.0)(engine);
+}
+
+// The fast path of Boost.Random's 128-layer ziggurat (normal_distribution.hpp, int_float_pair.hpp)
+// on the 8 words w[0..7], with Boost's own table: one 64-bit word gives the sign (bit 0), the layer
+// i (bits 1-7) and the uniform r = ((w with bit 11 cleared) >> 8) 2^-56 in [0, 1); x = r x_i is
+// accepted if x < x_{i+1}, about 98.8 % of the time. The value returned is Boost's
+// (x sign) 1 + 0, i.e. x or 0 - x (so -0 becomes +0). Writes the accepted lanes' normals to out and
+// returns the mask of the lanes it could not accept: those need boost_normal. Integer operations,
+// an exact conversion of a 56-bit integer rounded to nearest and two multiplications, so the SIMD
+// and the plain loop agree bit for bit.
+inline unsigned ziggurat_fast8(const std::uint64_t* w, double* out) {
+  const double* const table_x = boost::random::detail::normal_table<double>::table_x;
+  constexpr std::uint64_t kClearBit11 = ~(std::uint64_t{1} << 11);
+#ifdef __AVX512DQ__
+  const __m512i u = _mm512_loadu_si512(w);
+  const __m512i layer = _mm512_and_si512(_mm512_srli_epi64(u, 1), _mm512_set1_epi64(0x7F));
+  const __m512i bits = _mm512_srli_epi64(_mm512_and_si512(u, _mm512_set1_epi64(static_cast<long long>(kClearBit11))), 8);
+  const __m512d r = _mm512_mul_pd(_mm512_cvtepu64_pd(bits), _mm512_set1_pd(0x1p-56));
+  const __m512d x_i = _mm512_i64gather_pd(layer, table_x, 8);
+  const __m512d x_next = _mm512_i64gather_pd(layer, table_x + 1, 8);
+  const __m512d x = _mm512_mul_pd(r, x_i);
+  const __mmask8 accepted = _mm512_cmp_pd_mask(x, x_next, _CMP_LT_OQ);
+  const __mmask8 negative = _mm512_testn_epi64_mask(u, _mm512_set1_epi64(1));
+  _mm512_mask_storeu_pd(out, accepted, _mm512_mask_sub_pd(x, negative, _mm512_setzero_pd(), x));
+  return static_cast<unsigned>(static_cast<__mmask8>(~accepted));
+#else
+  unsigned rejected = 0;
+  for (int l = 0; l < 8; ++l) {
+    const int layer = static_cast<int>(w[l] >> 1 & 0x7F);
+    const double r = static_cast<double>((w[l] & kClearBit11) >> 8) * 0x1p-56;
+    const double x = r * table_x[layer];
+    if (x < table_x[layer + 1])
+      out[l] = (w[l] & 1) ? x : 0.0 - x;
+    else
+      rejected |= 1u << l;
+  }
+  return rejected;
+#endif
 }
 
 }  // namespace
@@ -96,75 +167,24 @@ void NormalStream::philox(std::uint64_t first_pair, std::uint64_t* w0, std::uint
   }
 #endif
   for (; i < kBlockPairs; ++i)
-    philox_one(first_pair + static_cast<std::uint64_t>(i), seed_high_, key_[0], key_[1], w0[i], w1[i]);
+    philox_one(first_pair + static_cast<std::uint64_t>(i), seed_high_, 0u, key_[0], key_[1], w0[i], w1[i]);
 }
-
-namespace {
-
-// Box-Muller on the two 64-bit words of each counter: radius sqrt(-2 ln u) from w1, and the
-// angle from w0 as phi uniform in (-pi/4, pi/4) (52 bits) turned by one of four quarter turns
-// (2 bits: swap sin/cos, negate both), which is uniform on the circle without a range reduction.
-// sin and cos of |phi| <= pi/4 are Taylor polynomials. The log is Eigen's SIMD log, always on
-// whole packets of 8, so a normal's value depends only on its counter, never on how a caller
-// chunks its requests or which lane it sits in. N pairs at once (a multiple of 8): each statement
-// is N / 8 independent vector chains side by side, which hides their latency. Pair i's normals go
-// to first[i] and second[i].
-template <int N>
-void box_muller(const std::uint64_t* w0, const std::uint64_t* w1, double* first, double* second) {
-  static_assert(N % 8 == 0);
-  using Block = Eigen::Array<double, N, 1>;
-  constexpr std::uint64_t kAngleBits = 0xFFFFFFFFFFFFFull;
-  Block angle_bits, radius_bits;  // exact conversions: both < 2^53
-#ifdef __AVX512DQ__
-  for (int i = 0; i < N; i += 8) {  // GCC converts one word at a time otherwise
-    const __m512i a = _mm512_loadu_si512(w0 + i), r = _mm512_loadu_si512(w1 + i);
-    _mm512_storeu_pd(angle_bits.data() + i,
-                     _mm512_cvtepu64_pd(_mm512_and_si512(a, _mm512_set1_epi64(static_cast<long long>(kAngleBits)))));
-    _mm512_storeu_pd(radius_bits.data() + i, _mm512_cvtepu64_pd(_mm512_srli_epi64(r, 11)));
-  }
-#else
-  for (int i = 0; i < N; ++i) {
-    angle_bits[i] = static_cast<double>(w0[i] & kAngleBits);
-    radius_bits[i] = static_cast<double>(w1[i] >> 11);
-  }
-#endif
-  const Block uniform = (radius_bits + 0.5) * 0x1p-53;  // (0, 1)
-  const Block phi = ((angle_bits + 0.5) * 0x1p-52 - 0.5) * 2.0 * kQuarterPi;
-  const Block log_u = uniform.log();  // a statement of its own: Eigen's SIMD path needs it alone
-  const Block t2 = phi * phi;
-  Block sin_poly = Block::Constant(kSinTaylor[0]), cos_poly = Block::Constant(kCosTaylor[0]);
-  for (std::size_t k = 1; k < kSinTaylor.size(); ++k) sin_poly = sin_poly * t2 + kSinTaylor[k];
-  for (std::size_t k = 1; k < kCosTaylor.size(); ++k) cos_poly = cos_poly * t2 + kCosTaylor[k];
-  const Block s = phi * sin_poly;
-  const Block radius_squared = -2.0 * log_u;
-#ifdef __AVX512F__
-  for (int i = 0; i < N; i += 8) {  // sqrt and the quarter turn in vectors (Eigen's sqrt and GCC keep the loop below scalar)
-    const __m512i bits = _mm512_loadu_si512(w0 + i);
-    const __mmask8 swap = _mm512_test_epi64_mask(bits, _mm512_set1_epi64(static_cast<long long>(1ull << 63)));
-    const __mmask8 negate = _mm512_test_epi64_mask(bits, _mm512_set1_epi64(1ll << 62));
-    const __m512d r = _mm512_sqrt_pd(_mm512_loadu_pd(radius_squared.data() + i));  // correctly rounded
-    const __m512d signed_r = _mm512_mask_mul_pd(r, negate, r, _mm512_set1_pd(-1.0));
-    const __m512d sin_v = _mm512_loadu_pd(s.data() + i), cos_v = _mm512_loadu_pd(cos_poly.data() + i);
-    _mm512_storeu_pd(first + i, _mm512_mul_pd(_mm512_mask_blend_pd(swap, sin_v, cos_v), signed_r));
-    _mm512_storeu_pd(second + i, _mm512_mul_pd(_mm512_mask_blend_pd(swap, cos_v, sin_v), signed_r));
-  }
-#else
-  for (int i = 0; i < N; ++i) {
-    const bool swap = (w0[i] >> 63) != 0;
-    const double r = std::sqrt(radius_squared[i]) * ((w0[i] >> 62 & 1u) ? -1.0 : 1.0);
-    first[i] = (swap ? cos_poly[i] : s[i]) * r;
-    second[i] = (swap ? s[i] : cos_poly[i]) * r;
-  }
-#endif
-}
-
-}  // namespace
 
 void NormalStream::block(std::uint64_t first_pair, double* out) const {
   alignas(64) std::uint64_t w0[kBlockPairs], w1[kBlockPairs];
   philox(first_pair, w0, w1);
-  double first[kBlockPairs], second[kBlockPairs];
-  box_muller<kBlockPairs>(w0, w1, first, second);
+  alignas(64) double first[kBlockPairs], second[kBlockPairs];
+  for (int i = 0; i < kBlockPairs; i += 8) {
+    for (int j = 0; j < 2; ++j) {
+      const std::uint64_t* words = j == 0 ? w0 + i : w1 + i;
+      double* normals = j == 0 ? first + i : second + i;
+      for (unsigned rejected = ziggurat_fast8(words, normals); rejected != 0; rejected &= rejected - 1) {
+        const int l = __builtin_ctz(rejected);
+        normals[l] = boost_normal(words[l], first_pair + static_cast<std::uint64_t>(i + l), j, seed_high_, key_[0],
+                                  key_[1]);
+      }
+    }
+  }
   for (int i = 0; i < kBlockPairs; ++i) {
     out[2 * i] = first[i];
     out[2 * i + 1] = second[i];
@@ -181,11 +201,11 @@ NormalLanes::NormalLanes(std::uint64_t seed, const std::uint64_t (&realizations)
 }
 
 void NormalLanes::block(std::uint64_t first_pair, double* out, std::ptrdiff_t stride) const {
-  // kGroups counters at a time: independent Philox and Box-Muller chains side by side.
+  // kGroups counters at a time: independent Philox chains side by side.
   constexpr int kGroups = 4;
   static_assert(kBlockPairs % kGroups == 0);
   for (int i = 0; i < kBlockPairs; i += kGroups) {
-    alignas(64) std::uint64_t w0[kGroups][kLanes], w1[kGroups][kLanes];
+    alignas(64) std::uint64_t w[kGroups][2][kLanes];  // word j of counter first_pair + i + g, lane by lane
 #ifdef __AVX512F__
     // NormalStream::philox with the counter the same in every lane and the keys per lane.
     const __m512i low = _mm512_set1_epi64(static_cast<long long>(kLow));
@@ -217,22 +237,26 @@ void NormalLanes::block(std::uint64_t first_pair, double* out, std::ptrdiff_t st
       key1 = _mm512_add_epi32(key1, w1_step);
     }
     for (int g = 0; g < kGroups; ++g) {
-      _mm512_store_si512(w0[g], _mm512_or_si512(_mm512_slli_epi64(c1[g], 32), _mm512_and_si512(c0[g], low)));
-      _mm512_store_si512(w1[g], _mm512_or_si512(_mm512_slli_epi64(c3[g], 32), _mm512_and_si512(c2[g], low)));
+      _mm512_store_si512(w[g][0], _mm512_or_si512(_mm512_slli_epi64(c1[g], 32), _mm512_and_si512(c0[g], low)));
+      _mm512_store_si512(w[g][1], _mm512_or_si512(_mm512_slli_epi64(c3[g], 32), _mm512_and_si512(c2[g], low)));
     }
 #else
     for (int g = 0; g < kGroups; ++g) {
       for (int l = 0; l < kLanes; ++l)
-        philox_one(first_pair + static_cast<std::uint64_t>(i + g), seed_high_[l], key0_[l], key1_[l], w0[g][l],
-                   w1[g][l]);
+        philox_one(first_pair + static_cast<std::uint64_t>(i + g), seed_high_[l], 0u, key0_[l], key1_[l], w[g][0][l],
+                   w[g][1][l]);
     }
 #endif
-    alignas(64) double first[kGroups][kLanes], second[kGroups][kLanes];
-    box_muller<kGroups * kLanes>(&w0[0][0], &w1[0][0], &first[0][0], &second[0][0]);
+    // Normal 2p + j of every lane, straight into its lane's slot.
     for (int g = 0; g < kGroups; ++g) {
-      const std::ptrdiff_t k = 2 * (i + g);
-      std::copy(first[g], first[g] + kLanes, out + k * stride);
-      std::copy(second[g], second[g] + kLanes, out + (k + 1) * stride);
+      const std::uint64_t p = first_pair + static_cast<std::uint64_t>(i + g);
+      for (int j = 0; j < 2; ++j) {
+        double* normals = out + static_cast<std::ptrdiff_t>(2 * (i + g) + j) * stride;
+        for (unsigned rejected = ziggurat_fast8(w[g][j], normals); rejected != 0; rejected &= rejected - 1) {
+          const int l = __builtin_ctz(rejected);
+          normals[l] = boost_normal(w[g][j][l], p, j, seed_high_[l], key0_[l], key1_[l]);
+        }
+      }
     }
   }
 }
