@@ -163,7 +163,7 @@ struct Rejected {
 
 // The 64-bit engine Boost.Random's normal_distribution draws rejected normal i from: first the
 // main word, then the words of the retry counters (p, p >> 32, seed_high, 1 + j + 2m) for
-// m = 0, 1, ..., each giving w0 then w1. Those of m = 0 (they serve 99.9 % of the slow normals)
+// m = 0, 1, ..., each giving w0 then w1. Those of m = 0 (all that 98.6 % of the slow normals need)
 // come precomputed, the others are computed when asked for.
 class ReplayEngine {
  public:
