@@ -45,7 +45,6 @@ void GearLanes::step() {
   using Packet = Eigen::Array<double, Ensemble::kPacket, 1>;
   const int n = lanes();
   for (int i = 0; i < n; ++i) plan_[i] = lane_[i].mesh.plan(n_);
-  const double H = h_, half = 0.5 * H;
   for (int p0 = 0; p0 < n; p0 += Ensemble::kPacket) {
     const int p1 = std::min(n, p0 + Ensemble::kPacket);
     bool simple = true;
@@ -63,21 +62,11 @@ void GearLanes::step() {
     }
     const auto seg = [&](const Eigen::ArrayXd& a) { return Packet(a.segment<Ensemble::kPacket>(p0)); };
     const Packet b = seg(b_), alpha = seg(alpha_), q3 = seg(q3_), mu = seg(mu_), load = seg(load_), K = seg(k_);
-    const Packet qa = q3 + mu * seg(fa_), qm = q3 + mu * seg(fm_), qb = q3 + mu * seg(fb_);
-    const auto acc = [&](const Packet& d, const Packet& v, const Packet& q) -> Packet {
-      const Packet g = d - d.max(-b).min(b);
-      return load - q * (K * g + (alpha * g.abs()) * v);
-    };
+    const Packet qa = kernel::fused_mul_add(mu, seg(fa_), q3), qm = kernel::fused_mul_add(mu, seg(fm_), q3),
+                 qb = kernel::fused_mul_add(mu, seg(fb_), q3);
     Packet d = seg(d_), v = seg(v_);
-    const Packet a1 = acc(d, v, qa);
-    const Packet v2 = v + half * a1;
-    const Packet a2 = acc(d + half * v, v2, qm);
-    const Packet v3 = v + half * a2;
-    const Packet a3 = acc(d + half * v2, v3, qm);
-    const Packet v4 = v + H * a3;
-    const Packet a4 = acc(d + H * v3, v4, qb);
-    d += (H / 6.0) * (v + 2.0 * v2 + 2.0 * v3 + v4);
-    v += (H / 6.0) * (a1 + 2.0 * a2 + 2.0 * a3 + a4);
+    // rk4_step's unsplit segment: H = (1 - 0) h, the load constant.
+    kernel::rk4_segment<Packet, Packet>(h_, K, b, alpha, qa, qm, qb, load, load, d, v);
     d_.segment<Ensemble::kPacket>(p0) = d;
     v_.segment<Ensemble::kPacket>(p0) = v;
   }

@@ -1,6 +1,7 @@
 // bench/gear_numpy.py is an independent implementation of the same model and scheme: on a
 // deterministic run it must follow the engine path by path (the 1e-9 relative) before the
-// chaotic separation (~0.1 s). Two starts over 10 ms: S1 from rest (free flight, the first
+// chaotic separation (~0.1 s). numpy rounds every product, the engine fuses some into its sums
+// (doc/model.md §5), so the two differ by rounding from the first steps on. Two starts over 10 ms: S1 from rest (free flight, the first
 // impacts), and at rest in contact, where every stiffness switch falls inside the contact, so the
 // switch splitting of doc/model.md §5 decides the result (without it the paths differ at order 1).
 #include <gtest/gtest.h>
@@ -27,7 +28,7 @@ gd::ModelConfig default_config() {
 
 // Runs numpy and the engine on S1 of `c` for 10 ms; compares every 0.5 ms, the deviation from
 // the flank (delta - b) relative to delta_scale and delta_dot relative to velocity_scale.
-void expect_same_path(const gd::ModelConfig& c, double delta_scale, double velocity_scale) {
+void expect_same_path(const gd::ModelConfig& c, double delta_scale, double velocity_scale, double tolerance) {
   const std::string dir = ::testing::TempDir(), params = dir + "gd_params.json",
                     out = dir + "gd_numpy.json";
   std::ofstream(params) << gear_bench::params_json(c);
@@ -44,9 +45,9 @@ void expect_same_path(const gd::ModelConfig& c, double delta_scale, double veloc
   const double b = c.gear.backlash;
   for (std::size_t k = 0; k < numpy["check_delta"].size(); ++k) {
     while (e.step_index() < static_cast<std::int64_t>(k) * 500) e.step();
-    EXPECT_NEAR(numpy["check_delta"][k].as<double>() - b, e.delta()[0] - b, 1e-9 * delta_scale)
+    EXPECT_NEAR(numpy["check_delta"][k].as<double>() - b, e.delta()[0] - b, tolerance * delta_scale)
         << "t = " << e.time();
-    EXPECT_NEAR(numpy["check_velocity"][k].as<double>(), e.velocity()[0], 1e-9 * velocity_scale)
+    EXPECT_NEAR(numpy["check_velocity"][k].as<double>(), e.velocity()[0], tolerance * velocity_scale)
         << "t = " << e.time();
   }
 }
@@ -56,7 +57,8 @@ void expect_same_path(const gd::ModelConfig& c, double delta_scale, double veloc
 TEST(NumpyBenchmark, MatchesEngineFromRest) {
   const gd::ModelConfig c = default_config();
   // Scales of the rattle: the backlash b and the impact speed sqrt(2 Phi0 b) = 45 mm/s.
-  expect_same_path(c, c.gear.backlash, std::sqrt(2.0 * c.load.initial_mean * c.gear.backlash));
+  // Rounding apart: the engine's fused and a plain double evaluation differ by 2e-13 at 10 ms.
+  expect_same_path(c, c.gear.backlash, std::sqrt(2.0 * c.load.initial_mean * c.gear.backlash), 1e-9);
 }
 
 TEST(NumpyBenchmark, MatchesEngineInContactAcrossSwitches) {
@@ -66,5 +68,10 @@ TEST(NumpyBenchmark, MatchesEngineInContactAcrossSwitches) {
   // an oscillation of amplitude ~x_s about the new equilibrium, and later switches kick it.
   const double xs = c.load.initial_mean / (g.q3 * g.k1);
   c.initial.deflection = c.gear.backlash + xs;
-  expect_same_path(c, xs, xs * std::sqrt(g.q3 * g.k2));
+  // This start amplifies rounding differences (e-folding ~0.6 ms from 4 ms on): at 10 ms a plain
+  // double evaluation of the scheme (numpy's, the engine's before its fused multiply-adds) is
+  // 1.0e-8 (delta) and 6.9e-9 (delta_dot) of these scales from the same scheme in long double, the
+  // engine's fused one 2.6e-8 and 1.8e-8, the two double ones 1.6e-8 and 1.1e-8 from each other
+  // (2026-12-01). So 1e-7 here: rounding only; a step not split at a switch errs at order 1.
+  expect_same_path(c, xs, xs * std::sqrt(g.q3 * g.k2), 1e-7);
 }
