@@ -1,34 +1,26 @@
 #include "gear_dynamics/engine/normal_stream.hpp"
 
-#include <Eigen/Core>
+#include <boost/random/normal_distribution.hpp>
 #include <immintrin.h>
 #include <algorithm>
-#include <array>
-#include <cmath>
 
 namespace gear_dynamics {
 
 namespace {
 
 constexpr int kBlockPairs = NormalStream::kBlockPairs;
-constexpr double kQuarterPi = 0.78539816339744830962;
-// Taylor coefficients of sin(t) / t and cos(t) in t^2, highest first; on |t| <= pi/4 the first
-// omitted terms are below 5e-17.
-constexpr std::array<double, 8> kSinTaylor = {-1.0 / 1307674368000, 1.0 / 6227020800, -1.0 / 39916800,
-                                              1.0 / 362880, -1.0 / 5040, 1.0 / 120, -1.0 / 6, 1.0};
-constexpr std::array<double, 9> kCosTaylor = {1.0 / 20922789888000, -1.0 / 87178291200, 1.0 / 479001600,
-                                              -1.0 / 3628800, 1.0 / 40320, -1.0 / 720, 1.0 / 24, -0.5, 1.0};
 
 // Philox4x32-10 (Salmon et al. 2011) constants, as in Random123's philox.h.
 constexpr std::uint32_t kPhiloxM0 = 0xD2511F53u, kPhiloxM1 = 0xCD9E8D57u;
 constexpr std::uint32_t kPhiloxW0 = 0x9E3779B9u, kPhiloxW1 = 0xBB67AE85u;
 constexpr std::uint64_t kLow = 0xFFFFFFFFull;  // a 32-bit word held in 64 bits
 
-// Philox4x32-10 of one counter (p, p >> 32, seed_high, 0) with key (k0, k1), as the words
-// w0 = out[1]:out[0] and w1 = out[3]:out[2]: the reference the SIMD paths must equal.
-inline void philox_one(std::uint64_t p, std::uint32_t seed_high, std::uint32_t k0, std::uint32_t k1,
-                       std::uint64_t& w0, std::uint64_t& w1) {
-  std::uint64_t c0 = p & kLow, c1 = p >> 32, c2 = seed_high, c3 = 0u;
+// Philox4x32-10 of one counter (p, p >> 32, seed_high, c3) with key (k0, k1), as the words
+// w0 = out[1]:out[0] and w1 = out[3]:out[2]: the reference the SIMD paths must equal (c3 = 0), and
+// the retry words of the ziggurat's slow path (c3 > 0).
+inline void philox_one(std::uint64_t p, std::uint32_t seed_high, std::uint32_t c3_word, std::uint32_t k0,
+                       std::uint32_t k1, std::uint64_t& w0, std::uint64_t& w1) {
+  std::uint64_t c0 = p & kLow, c1 = p >> 32, c2 = seed_high, c3 = c3_word;
   for (int round = 0; round < 10; ++round) {
     const std::uint64_t p0 = c0 * kPhiloxM0, p1 = c2 * kPhiloxM1;
     c0 = (p1 >> 32) ^ c1 ^ k0;
@@ -40,6 +32,179 @@ inline void philox_one(std::uint64_t p, std::uint32_t seed_high, std::uint32_t k
   }
   w0 = (c1 << 32) | c0;
   w1 = (c3 << 32) | c2;
+}
+
+// The fast path of Boost.Random's 128-layer ziggurat (normal_distribution.hpp, int_float_pair.hpp),
+// with Boost's own table, on vectors of 8 words: one 64-bit word gives the sign (bit 0), the layer
+// i (bits 1-7) and the uniform r = ((word with bit 11 cleared) >> 8) 2^-56 in [0, 1); x = r x_i is
+// accepted if x < x_{i+1}, 97.2 % of the time. The value is Boost's (x sign) 1 + 0, i.e. x or
+// 0 - x (so -0 becomes +0). Integer operations, a conversion of a 56-bit integer rounded to nearest
+// and two multiplications: the SIMD and the plain loop agree bit for bit.
+//
+// words[8 v + l] is word l of vector v, for first <= v < last; an accepted normal goes to
+// out(v)[l], the index 8 v + l of each other one to rejects, in order (rejects needs room for 8
+// more than the count). Returns how many were rejected.
+template <class Out>
+int ziggurat_fast(const std::uint64_t* words, int first, int last, Out out, std::uint16_t* rejects) {
+  const double* const table_x = boost::random::detail::normal_table<double>::table_x;
+  constexpr std::uint64_t kClearBit11 = ~(std::uint64_t{1} << 11);
+  int count = 0;
+#ifdef __AVX512DQ__
+  const __m512i lane = _mm512_set_epi64(7, 6, 5, 4, 3, 2, 1, 0);
+  for (int v = first; v < last; ++v) {
+    const __m512i u = _mm512_loadu_si512(words + 8 * v);
+    const __m512i layer = _mm512_and_si512(_mm512_srli_epi64(u, 1), _mm512_set1_epi64(0x7F));
+    const __m512i bits = _mm512_srli_epi64(_mm512_and_si512(u, _mm512_set1_epi64(static_cast<long long>(kClearBit11))), 8);
+    const __m512d r = _mm512_mul_pd(_mm512_cvtepu64_pd(bits), _mm512_set1_pd(0x1p-56));
+    const __m512d x = _mm512_mul_pd(r, _mm512_i64gather_pd(layer, table_x, 8));
+    const __mmask8 accepted = _mm512_cmp_pd_mask(x, _mm512_i64gather_pd(layer, table_x + 1, 8), _CMP_LT_OQ);
+    const __mmask8 negative = _mm512_testn_epi64_mask(u, _mm512_set1_epi64(1));
+    _mm512_mask_storeu_pd(out(v), accepted, _mm512_mask_sub_pd(x, negative, _mm512_setzero_pd(), x));
+    // The rejected lanes' indices, packed in a register and stored whole (a compressing store to
+    // memory is microcoded and slow): no branch on data that is random by design.
+    const __mmask8 rejected = static_cast<__mmask8>(~accepted);
+    const __m512i index = _mm512_maskz_compress_epi64(rejected, _mm512_add_epi64(_mm512_set1_epi64(8 * v), lane));
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(rejects + count), _mm512_cvtepi64_epi16(index));
+    count += __builtin_popcount(rejected);
+  }
+#else
+  for (int v = first; v < last; ++v) {
+    for (int l = 0; l < 8; ++l) {
+      const std::uint64_t u = words[8 * v + l];
+      const int layer = static_cast<int>(u >> 1 & 0x7F);
+      const double r = static_cast<double>((u & kClearBit11) >> 8) * 0x1p-56;
+      const double x = r * table_x[layer];
+      if (x < table_x[layer + 1])
+        out(v)[l] = (u & 1) ? x : 0.0 - x;
+      else
+        rejects[count++] = static_cast<std::uint16_t>(8 * v + l);
+    }
+  }
+#endif
+  return count;
+}
+
+// Up to kChunk normals the fast path rejected. Slot i is normal k = 2p + j of the stream with
+// key (k0, k1) and counter word seed_high, whose main word (word j of counter
+// (p, p >> 32, seed_high, 0)) is word; c3 = 1 + j is its first retry counter's last word.
+struct Rejected {
+  static constexpr int kChunk = 16;
+  std::uint64_t word[kChunk], p[kChunk];
+  std::uint32_t c3[kChunk], seed_high[kChunk], k0[kChunk], k1[kChunk];
+  double* out[kChunk];
+  // The words of counter (p, p >> 32, seed_high, c3) of each slot, for slots 0 ... count - 1.
+  alignas(64) std::uint64_t retry0[kChunk], retry1[kChunk];
+  int count = 0;
+
+  void add(std::uint64_t main_word, std::uint64_t pair, int j, std::uint32_t seed_hi, std::uint32_t key0,
+           std::uint32_t key1, double* normal) {
+    word[count] = main_word;
+    p[count] = pair;
+    c3[count] = 1u + static_cast<std::uint32_t>(j);
+    seed_high[count] = seed_hi;
+    k0[count] = key0;
+    k1[count] = key1;
+    out[count++] = normal;
+  }
+
+  // The words of each slot's first retry counter into retry0, retry1.
+  void first_retry_words() {
+#ifdef __AVX512VL__
+    if (count <= 8)
+      first_retry_words<1>();
+    else
+      first_retry_words<2>();
+#else
+    for (int i = 0; i < count; ++i) philox_one(p[i], seed_high[i], c3[i], k0[i], k1[i], retry0[i], retry1[i]);
+#endif
+  }
+
+#ifdef __AVX512VL__
+  // Philox4x32-10 with counters and keys per lane on slots 0 ... 8 G - 1 (those past count read
+  // as zeros; their words are not used), as in NormalLanes::block.
+  template <int G>
+  void first_retry_words() {
+    static_assert(8 * G <= kChunk);
+    const __m512i low = _mm512_set1_epi64(static_cast<long long>(kLow));
+    const __m512i m0 = _mm512_set1_epi64(kPhiloxM0), m1 = _mm512_set1_epi64(kPhiloxM1);
+    const __m512i w0_step = _mm512_set1_epi64(kPhiloxW0), w1_step = _mm512_set1_epi64(kPhiloxW1);
+    __m512i c0[G], c1[G], c2[G], c3v[G], key0[G], key1[G];
+    for (int g = 0; g < G; ++g) {
+      const __mmask8 filled = static_cast<__mmask8>((1u << std::clamp(count - 8 * g, 0, 8)) - 1);
+      const auto load32 = [filled](const std::uint32_t* x) {
+        return _mm512_cvtepu32_epi64(_mm256_maskz_loadu_epi32(filled, x));
+      };
+      c0[g] = _mm512_maskz_loadu_epi64(filled, p + 8 * g);  // vpmuludq ignores its high half
+      c1[g] = _mm512_srli_epi64(c0[g], 32);
+      c2[g] = load32(seed_high + 8 * g);
+      c3v[g] = load32(c3 + 8 * g);
+      key0[g] = load32(k0 + 8 * g);
+      key1[g] = load32(k1 + 8 * g);
+    }
+    for (int round = 0; round < 10; ++round) {
+      for (int g = 0; g < G; ++g) {
+        const __m512i p0 = _mm512_mul_epu32(c0[g], m0);
+        const __m512i p1 = _mm512_mul_epu32(c2[g], m1);
+        c0[g] = _mm512_xor_si512(_mm512_xor_si512(_mm512_srli_epi64(p1, 32), c1[g]), key0[g]);
+        c1[g] = p1;
+        c2[g] = _mm512_xor_si512(_mm512_xor_si512(_mm512_srli_epi64(p0, 32), c3v[g]), key1[g]);
+        c3v[g] = p0;
+        key0[g] = _mm512_add_epi32(key0[g], w0_step);
+        key1[g] = _mm512_add_epi32(key1[g], w1_step);
+      }
+    }
+    for (int g = 0; g < G; ++g) {
+      _mm512_store_si512(retry0 + 8 * g, _mm512_or_si512(_mm512_slli_epi64(c1[g], 32), _mm512_and_si512(c0[g], low)));
+      _mm512_store_si512(retry1 + 8 * g, _mm512_or_si512(_mm512_slli_epi64(c3v[g], 32), _mm512_and_si512(c2[g], low)));
+    }
+  }
+#endif
+};
+
+// The 64-bit engine Boost.Random's normal_distribution draws rejected normal i from: first the
+// main word, then the words of the retry counters (p, p >> 32, seed_high, 1 + j + 2m) for
+// m = 0, 1, ..., each giving w0 then w1. Those of m = 0 (all that 98.6 % of the slow normals need)
+// come precomputed, the others are computed when asked for.
+class ReplayEngine {
+ public:
+  using result_type = std::uint64_t;
+  static constexpr result_type min() { return 0; }
+  static constexpr result_type max() { return ~result_type{0}; }
+
+  ReplayEngine(const Rejected& rejected, int i)
+      : normals_(rejected), i_(i), retry_{rejected.retry0[i], rejected.retry1[i]} {}
+
+  result_type operator()() {
+    const unsigned n = drawn_++;
+    if (n == 0) return normals_.word[i_];
+    if (n >= 3 && n % 2 == 1)  // word 0 of retry counter m = (n - 1) / 2 >= 1, c3 = 1 + j + 2m
+      philox_one(normals_.p[i_], normals_.seed_high[i_], normals_.c3[i_] + (n - 1), normals_.k0[i_], normals_.k1[i_],
+                 retry_[0], retry_[1]);
+    return retry_[(n - 1) % 2];
+  }
+
+ private:
+  const Rejected& normals_;
+  int i_;
+  std::uint64_t retry_[2];
+  unsigned drawn_ = 0;
+};
+
+// The slow path for the rejects of ziggurat_fast (add(index, chunk) puts each into a chunk):
+// Boost.Random's normal_distribution<double>(0, 1) in full on each one's engine (it repeats the
+// fast test on the main word and goes on to the wedge or the tail), kChunk at a time so that
+// their first retry words come from one SIMD Philox.
+template <class Add>
+void slow_normals(const std::uint16_t* rejects, int count, Add add) {
+  for (int start = 0; start < count; start += Rejected::kChunk) {
+    Rejected chunk;
+    for (int n = start; n < std::min(count, start + Rejected::kChunk); ++n) add(rejects[n], chunk);
+    chunk.first_retry_words();
+    for (int i = 0; i < chunk.count; ++i) {
+      ReplayEngine engine(chunk, i);
+      *chunk.out[i] = boost::random::normal_distribution<double>(0.0, 1.0)(engine);
+    }
+  }
 }
 
 }  // namespace
@@ -96,78 +261,24 @@ void NormalStream::philox(std::uint64_t first_pair, std::uint64_t* w0, std::uint
   }
 #endif
   for (; i < kBlockPairs; ++i)
-    philox_one(first_pair + static_cast<std::uint64_t>(i), seed_high_, key_[0], key_[1], w0[i], w1[i]);
+    philox_one(first_pair + static_cast<std::uint64_t>(i), seed_high_, 0u, key_[0], key_[1], w0[i], w1[i]);
 }
-
-namespace {
-
-// Box-Muller on the two 64-bit words of each counter: radius sqrt(-2 ln u) from w1, and the
-// angle from w0 as phi uniform in (-pi/4, pi/4) (52 bits) turned by one of four quarter turns
-// (2 bits: swap sin/cos, negate both), which is uniform on the circle without a range reduction.
-// sin and cos of |phi| <= pi/4 are Taylor polynomials. The log is Eigen's SIMD log, always on
-// whole packets of 8, so a normal's value depends only on its counter, never on how a caller
-// chunks its requests or which lane it sits in. N pairs at once (a multiple of 8): each statement
-// is N / 8 independent vector chains side by side, which hides their latency. Pair i's normals go
-// to first[i] and second[i].
-template <int N>
-void box_muller(const std::uint64_t* w0, const std::uint64_t* w1, double* first, double* second) {
-  static_assert(N % 8 == 0);
-  using Block = Eigen::Array<double, N, 1>;
-  constexpr std::uint64_t kAngleBits = 0xFFFFFFFFFFFFFull;
-  Block angle_bits, radius_bits;  // exact conversions: both < 2^53
-#ifdef __AVX512DQ__
-  for (int i = 0; i < N; i += 8) {  // GCC converts one word at a time otherwise
-    const __m512i a = _mm512_loadu_si512(w0 + i), r = _mm512_loadu_si512(w1 + i);
-    _mm512_storeu_pd(angle_bits.data() + i,
-                     _mm512_cvtepu64_pd(_mm512_and_si512(a, _mm512_set1_epi64(static_cast<long long>(kAngleBits)))));
-    _mm512_storeu_pd(radius_bits.data() + i, _mm512_cvtepu64_pd(_mm512_srli_epi64(r, 11)));
-  }
-#else
-  for (int i = 0; i < N; ++i) {
-    angle_bits[i] = static_cast<double>(w0[i] & kAngleBits);
-    radius_bits[i] = static_cast<double>(w1[i] >> 11);
-  }
-#endif
-  const Block uniform = (radius_bits + 0.5) * 0x1p-53;  // (0, 1)
-  const Block phi = ((angle_bits + 0.5) * 0x1p-52 - 0.5) * 2.0 * kQuarterPi;
-  const Block log_u = uniform.log();  // a statement of its own: Eigen's SIMD path needs it alone
-  const Block t2 = phi * phi;
-  Block sin_poly = Block::Constant(kSinTaylor[0]), cos_poly = Block::Constant(kCosTaylor[0]);
-  for (std::size_t k = 1; k < kSinTaylor.size(); ++k) sin_poly = sin_poly * t2 + kSinTaylor[k];
-  for (std::size_t k = 1; k < kCosTaylor.size(); ++k) cos_poly = cos_poly * t2 + kCosTaylor[k];
-  const Block s = phi * sin_poly;
-  const Block radius_squared = -2.0 * log_u;
-#ifdef __AVX512F__
-  for (int i = 0; i < N; i += 8) {  // sqrt and the quarter turn in vectors (Eigen's sqrt and GCC keep the loop below scalar)
-    const __m512i bits = _mm512_loadu_si512(w0 + i);
-    const __mmask8 swap = _mm512_test_epi64_mask(bits, _mm512_set1_epi64(static_cast<long long>(1ull << 63)));
-    const __mmask8 negate = _mm512_test_epi64_mask(bits, _mm512_set1_epi64(1ll << 62));
-    const __m512d r = _mm512_sqrt_pd(_mm512_loadu_pd(radius_squared.data() + i));  // correctly rounded
-    const __m512d signed_r = _mm512_mask_mul_pd(r, negate, r, _mm512_set1_pd(-1.0));
-    const __m512d sin_v = _mm512_loadu_pd(s.data() + i), cos_v = _mm512_loadu_pd(cos_poly.data() + i);
-    _mm512_storeu_pd(first + i, _mm512_mul_pd(_mm512_mask_blend_pd(swap, sin_v, cos_v), signed_r));
-    _mm512_storeu_pd(second + i, _mm512_mul_pd(_mm512_mask_blend_pd(swap, cos_v, sin_v), signed_r));
-  }
-#else
-  for (int i = 0; i < N; ++i) {
-    const bool swap = (w0[i] >> 63) != 0;
-    const double r = std::sqrt(radius_squared[i]) * ((w0[i] >> 62 & 1u) ? -1.0 : 1.0);
-    first[i] = (swap ? cos_poly[i] : s[i]) * r;
-    second[i] = (swap ? s[i] : cos_poly[i]) * r;
-  }
-#endif
-}
-
-}  // namespace
 
 void NormalStream::block(std::uint64_t first_pair, double* out) const {
-  alignas(64) std::uint64_t w0[kBlockPairs], w1[kBlockPairs];
-  philox(first_pair, w0, w1);
-  double first[kBlockPairs], second[kBlockPairs];
-  box_muller<kBlockPairs>(w0, w1, first, second);
+  // words[j][i]: word j of counter first_pair + i, i.e. the main word of normal 2 (first_pair + i) + j.
+  alignas(64) std::uint64_t words[2][kBlockPairs];
+  philox(first_pair, words[0], words[1]);
+  alignas(64) double normals[2][kBlockPairs];
+  constexpr int kVectors = 2 * kBlockPairs / 8;
+  std::uint16_t rejects[2 * kBlockPairs + 8];
+  const int count = ziggurat_fast(&words[0][0], 0, kVectors, [&](int v) { return &normals[0][0] + 8 * v; }, rejects);
+  slow_normals(rejects, count, [&](int index, Rejected& chunk) {
+    const int j = index / kBlockPairs, i = index % kBlockPairs;
+    chunk.add(words[j][i], first_pair + static_cast<std::uint64_t>(i), j, seed_high_, key_[0], key_[1], &normals[j][i]);
+  });
   for (int i = 0; i < kBlockPairs; ++i) {
-    out[2 * i] = first[i];
-    out[2 * i + 1] = second[i];
+    out[2 * i] = normals[0][i];
+    out[2 * i + 1] = normals[1][i];
   }
 }
 
@@ -181,11 +292,16 @@ NormalLanes::NormalLanes(std::uint64_t seed, const std::uint64_t (&realizations)
 }
 
 void NormalLanes::block(std::uint64_t first_pair, double* out, std::ptrdiff_t stride) const {
-  // kGroups counters at a time: independent Philox and Box-Muller chains side by side.
+  // kGroups counters at a time: independent Philox chains side by side.
   constexpr int kGroups = 4;
   static_assert(kBlockPairs % kGroups == 0);
+  // words[i][j][l]: word j of counter first_pair + i of lane l, the main word of the lane's normal
+  // k = 2 (first_pair + i) + j, which goes to out[k * stride + l]; vector k of 8 words.
+  alignas(64) std::uint64_t words[kBlockPairs][2][kLanes];
+  std::uint16_t rejects[2 * kBlockPairs * kLanes + 8];
+  int count = 0;
+  const auto normals = [&](int k) { return out + k * stride; };
   for (int i = 0; i < kBlockPairs; i += kGroups) {
-    alignas(64) std::uint64_t w0[kGroups][kLanes], w1[kGroups][kLanes];
 #ifdef __AVX512F__
     // NormalStream::philox with the counter the same in every lane and the keys per lane.
     const __m512i low = _mm512_set1_epi64(static_cast<long long>(kLow));
@@ -217,24 +333,24 @@ void NormalLanes::block(std::uint64_t first_pair, double* out, std::ptrdiff_t st
       key1 = _mm512_add_epi32(key1, w1_step);
     }
     for (int g = 0; g < kGroups; ++g) {
-      _mm512_store_si512(w0[g], _mm512_or_si512(_mm512_slli_epi64(c1[g], 32), _mm512_and_si512(c0[g], low)));
-      _mm512_store_si512(w1[g], _mm512_or_si512(_mm512_slli_epi64(c3[g], 32), _mm512_and_si512(c2[g], low)));
+      _mm512_store_si512(words[i + g][0], _mm512_or_si512(_mm512_slli_epi64(c1[g], 32), _mm512_and_si512(c0[g], low)));
+      _mm512_store_si512(words[i + g][1], _mm512_or_si512(_mm512_slli_epi64(c3[g], 32), _mm512_and_si512(c2[g], low)));
     }
 #else
     for (int g = 0; g < kGroups; ++g) {
       for (int l = 0; l < kLanes; ++l)
-        philox_one(first_pair + static_cast<std::uint64_t>(i + g), seed_high_[l], key0_[l], key1_[l], w0[g][l],
-                   w1[g][l]);
+        philox_one(first_pair + static_cast<std::uint64_t>(i + g), seed_high_[l], 0u, key0_[l], key1_[l],
+                   words[i + g][0][l], words[i + g][1][l]);
     }
 #endif
-    alignas(64) double first[kGroups][kLanes], second[kGroups][kLanes];
-    box_muller<kGroups * kLanes>(&w0[0][0], &w1[0][0], &first[0][0], &second[0][0]);
-    for (int g = 0; g < kGroups; ++g) {
-      const std::ptrdiff_t k = 2 * (i + g);
-      std::copy(first[g], first[g] + kLanes, out + k * stride);
-      std::copy(second[g], second[g] + kLanes, out + (k + 1) * stride);
-    }
+    // The fast path right away, while the words are in L1; each normal straight into its lane's slot.
+    count += ziggurat_fast(&words[0][0][0], 2 * i, 2 * (i + kGroups), normals, rejects + count);
   }
+  slow_normals(rejects, count, [&](int index, Rejected& chunk) {
+    const int k = index / kLanes, l = index % kLanes;
+    chunk.add(words[k / 2][k % 2][l], first_pair + static_cast<std::uint64_t>(k / 2), k % 2, seed_high_[l], key0_[l],
+              key1_[l], normals(k) + l);
+  });
 }
 
 double NormalStream::at(std::uint64_t index) const {

@@ -2,11 +2,13 @@
 // across realizations.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <vector>
 
 #include <Random123/philox.h>
+#include <boost/random/normal_distribution.hpp>
 
 #include "gear_dynamics/engine/ensemble.hpp"
 #include "gear_dynamics/engine/normal_stream.hpp"
@@ -16,6 +18,63 @@ namespace gd = gear_dynamics;
 namespace {
 
 bool bit_equal(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+// doc/model.md §9's streams written from their definition, independently of normal_stream.cpp:
+// Random123's Philox4x32-10 for the words, Boost.Random's normal_distribution for the normals.
+class ReferenceStream {
+ public:
+  ReferenceStream(std::uint64_t seed, std::uint64_t r)
+      : key_{{static_cast<std::uint32_t>(r), static_cast<std::uint32_t>(seed)}},
+        seed_high_(static_cast<std::uint32_t>(seed >> 32) ^ static_cast<std::uint32_t>(r >> 32) * 0x9E3779B9u) {}
+
+  // Word j of counter (p, p >> 32, seed_high, c3): out[1]:out[0] for j = 0, out[3]:out[2] for j = 1.
+  std::uint64_t word(std::uint64_t p, std::uint32_t c3, int j) const {
+    const r123::Philox4x32::ctr_type ctr = {
+        {static_cast<std::uint32_t>(p), static_cast<std::uint32_t>(p >> 32), seed_high_, c3}};
+    const auto out = r123::Philox4x32()(ctr, key_);
+    return std::uint64_t{out[2 * j + 1]} << 32 | out[2 * j];
+  }
+
+  // The engine normal k = 2p + j is drawn from: word j of counter p (c3 = 0), then the words of the
+  // retry counters c3 = 1 + j + 2m, m = 0, 1, ..., w0 before w1.
+  struct Engine {
+    using result_type = std::uint64_t;
+    static constexpr result_type min() { return 0; }
+    static constexpr result_type max() { return ~result_type{0}; }
+    result_type operator()() {
+      const int n = drawn++;
+      if (n == 0) return stream->word(k / 2, 0u, static_cast<int>(k % 2));
+      const auto m = static_cast<std::uint32_t>((n - 1) / 2);
+      return stream->word(k / 2, static_cast<std::uint32_t>(1 + k % 2) + 2 * m, (n - 1) % 2);
+    }
+    const ReferenceStream* stream;
+    std::uint64_t k;
+    int drawn = 0;
+  };
+
+  // Normal k, and how many words it took.
+  double normal(std::uint64_t k, int* words = nullptr) const {
+    Engine engine{this, k};
+    const double z = boost::random::normal_distribution<double>(0.0, 1.0)(engine);
+    if (words) *words = engine.drawn;
+    return z;
+  }
+
+ private:
+  r123::Philox4x32::key_type key_;
+  std::uint32_t seed_high_;
+};
+
+// Which way Boost's ziggurat went for a normal that needed more than its main word: the layer
+// (bits 1-7 of the main word) 0 is the base strip, whose rejects go to the tail.
+struct SlowPathCount {
+  long wedge = 0, tail = 0, second_retry_counter = 0;
+  void add(std::uint64_t main_word, int words) {
+    if (words == 1) return;
+    ((main_word >> 1 & 0x7F) == 0 ? tail : wedge) += 1;
+    second_retry_counter += words > 3;  // beyond the words of retry counter m = 0
+  }
+};
 
 gd::LaneSpec stochastic(std::uint64_t r, double mu) {
   gd::LaneSpec s;
@@ -55,24 +114,69 @@ TEST(NormalStream, PhiloxMatchesRandom123) {
   }
 }
 
-// Ensemble's lane-major generator: each lane is its own realization's stream bit for bit, whatever
-// the other lanes hold (high realization and seed bits included), at every block of counters.
-TEST(NormalLanes, EachLaneIsItsRealizationsStream) {
-  constexpr int kLanes = gd::NormalLanes::kLanes, kBlock = 2 * gd::NormalLanes::kBlockPairs;
+// The normals are Boost.Random's ziggurat (normal_distribution<double>(0, 1)) on each normal's own
+// Philox words, bit for bit, with high seed and realization bits too, over enough normals that
+// the SIMD fast path's rejects take all of Boost's slow paths: the wedges, the tail beyond
+// x_1 = 3.44, and retries past the first retry counter.
+TEST(NormalStream, IsBoostsZigguratOnItsPhiloxWords) {
+  SlowPathCount slow;
+  long normals = 0;
   for (const std::uint64_t seed : {20180529ull, 0x123456789ABCDEFull}) {
-    const std::uint64_t realizations[kLanes] = {0, 7, 3, (1ull << 33) + 5, 99, 1, 1000000, 2};
-    const gd::NormalLanes lanes(seed, realizations);
-    for (const std::uint64_t first_pair : {0ull, 32ull, (1ull << 32) - 32}) {
-      double out[kBlock * kLanes];
-      lanes.block(first_pair, out, kLanes);
-      for (int l = 0; l < kLanes; ++l) {
-        std::vector<double> expected(kBlock);
-        gd::NormalStream(seed, realizations[l]).fill(2 * first_pair, expected.data(), kBlock);
-        for (int k = 0; k < kBlock; ++k)
-          ASSERT_TRUE(bit_equal(out[k * kLanes + l], expected[k])) << "lane " << l << ", normal " << k;
+    for (const std::uint64_t r : {0ull, 99ull, (1ull << 33) + 5}) {
+      const gd::NormalStream s(seed, r);
+      const ReferenceStream reference(seed, r);
+      for (const std::uint64_t first : {0ull, (1ull << 33) - 64}) {  // counters with high bits too
+        std::vector<double> z(100000);
+        s.fill(first, z.data(), z.size());
+        for (std::size_t i = 0; i < z.size(); ++i) {
+          int words = 0;
+          const double expected = reference.normal(first + i, &words);
+          ASSERT_TRUE(bit_equal(z[i], expected)) << "seed " << seed << ", r " << r << ", normal " << first + i
+                                                 << ": " << z[i] << " != " << expected;
+          slow.add(reference.word((first + i) / 2, 0u, static_cast<int>((first + i) % 2)), words);
+          ++normals;
+        }
       }
     }
   }
+  // 1.2e6 normals: 2.70 % are expected in a wedge (sum over layers 1-127 of (1 - x_{i+1} / x_i) / 128
+  // with Boost's table) and 0.057 % in the tail (the base strip's 1 - x_1 / x_0 = 7.3 %, / 128); at
+  // least a third of each, far beyond chance (Poisson).
+  EXPECT_GT(slow.wedge, normals * 0.0270 / 3);
+  EXPECT_GT(slow.tail, normals * 0.00057 / 3);
+  EXPECT_GT(slow.second_retry_counter, 100);  // 0.04 % expected (10^7 normals measured, 2026-12-01)
+}
+
+// Ensemble's lane-major generator: each lane is its own realization's stream bit for bit, whatever
+// the other lanes hold (high realization and seed bits included), at every block of counters; and
+// so Boost's ziggurat on the lane's words, slow paths included.
+TEST(NormalLanes, EachLaneIsItsRealizationsStream) {
+  constexpr int kLanes = gd::NormalLanes::kLanes, kBlock = 2 * gd::NormalLanes::kBlockPairs;
+  SlowPathCount slow;
+  for (const std::uint64_t seed : {20180529ull, 0x123456789ABCDEFull}) {
+    const std::uint64_t realizations[kLanes] = {0, 7, 3, (1ull << 33) + 5, 99, 1, 1000000, 2};
+    const gd::NormalLanes lanes(seed, realizations);
+    for (const std::uint64_t start : {0ull, (1ull << 32) - 32 * 64}) {
+      for (std::uint64_t first_pair = start; first_pair < start + 32 * 64; first_pair += 32) {
+        double out[kBlock * kLanes];
+        lanes.block(first_pair, out, kLanes);
+        for (int l = 0; l < kLanes; ++l) {
+          std::vector<double> expected(kBlock);
+          gd::NormalStream(seed, realizations[l]).fill(2 * first_pair, expected.data(), kBlock);
+          const ReferenceStream reference(seed, realizations[l]);
+          for (int k = 0; k < kBlock; ++k) {
+            ASSERT_TRUE(bit_equal(out[k * kLanes + l], expected[k])) << "lane " << l << ", normal " << k;
+            int words = 0;
+            ASSERT_TRUE(bit_equal(out[k * kLanes + l], reference.normal(2 * first_pair + k, &words)));
+            slow.add(reference.word(first_pair + k / 2, 0u, k % 2), words);
+          }
+        }
+      }
+    }
+  }
+  // 1.3e5 normals: about 3500 in a wedge, 75 in the tail.
+  EXPECT_GT(slow.wedge, 1000);
+  EXPECT_GT(slow.tail, 20);
 }
 
 TEST(NormalStream, FillEqualsAtFromAnyOffset) {
@@ -118,29 +222,74 @@ TEST(NormalStream, MomentsAndIndependence) {
   // Independent streams: the correlation of n pairs has standard error 1/sqrt(n).
   EXPECT_NEAR(moment(x, y) / std::sqrt(moment(x, x) * moment(y, y)), 0.0, 4.0 / std::sqrt(n));
   EXPECT_NEAR(moment(x, z) / std::sqrt(moment(x, x) * moment(z, z)), 0.0, 4.0 / std::sqrt(n));
-  // Within a stream, consecutive normals (the two of a Box-Muller pair included) are uncorrelated.
+  // Within a stream, consecutive normals (the two words of one Philox counter included) are uncorrelated.
   std::vector<double> lead(x.begin() + 1, x.end()), lag(x.begin(), x.end() - 1);
   lead.push_back(x[0]);
   lag.push_back(x[n - 1]);
   EXPECT_NEAR(moment(lead, lag), 0.0, 4.0 / std::sqrt(n));
 }
 
+// Kolmogorov-Smirnov against the standard normal CDF over 1e6 normals of 4 streams. Under the null
+// hypothesis sqrt(n) D is Kolmogorov distributed: P(sqrt(n) D > 1.949) = 0.001, so a correct
+// generator fails this (fixed-seed, deterministic) check for one seed in a thousand, while a defect
+// of 0.002 in the CDF anywhere (sqrt(n) D = 2) fails it.
+TEST(NormalStream, KolmogorovSmirnovAgainstNormalCdf) {
+  constexpr int kStreams = 4, kPerStream = 250000;
+  std::vector<double> z(kStreams * kPerStream);
+  for (int r = 0; r < kStreams; ++r) gd::NormalStream(20180529, static_cast<std::uint64_t>(r)).fill(0, &z[r * kPerStream], kPerStream);
+  std::sort(z.begin(), z.end());
+  const double n = static_cast<double>(z.size());
+  double d = 0;
+  for (std::size_t i = 0; i < z.size(); ++i) {
+    const double cdf = 0.5 * std::erfc(-z[i] / std::sqrt(2.0));
+    d = std::max({d, (i + 1) / n - cdf, cdf - i / n});
+  }
+  EXPECT_LT(std::sqrt(n) * d, 1.949) << "D = " << d;
+}
+
+// The tails along the streams, where the ziggurat's slow paths (the wedges near x_127 ... x_1, the
+// tail algorithm beyond x_1 = 3.44) decide: counts beyond +-3, +-3.5 and +-4 over 4e6 normals of 16
+// streams are Poisson, within 5 of their standard deviations sqrt(expected) (127 expected beyond 4
+// on each side, 930 beyond 3.5, 5400 beyond 3).
+TEST(NormalStream, TailCountsAlongStreams) {
+  constexpr int kStreams = 16, kPerStream = 250000;
+  const double thresholds[] = {3.0, 3.5, 4.0};
+  long below[3] = {0, 0, 0}, above[3] = {0, 0, 0};
+  std::vector<double> z(kPerStream);
+  for (int r = 0; r < kStreams; ++r) {
+    gd::NormalStream(0x5EED00000000ull + 7, static_cast<std::uint64_t>(r)).fill(0, z.data(), z.size());
+    for (double x : z) {
+      for (int t = 0; t < 3; ++t) {
+        below[t] += x < -thresholds[t];
+        above[t] += x > thresholds[t];
+      }
+    }
+  }
+  for (int t = 0; t < 3; ++t) {
+    const double expected = kStreams * kPerStream * 0.5 * std::erfc(thresholds[t] / std::sqrt(2.0));
+    EXPECT_NEAR(below[t], expected, 5.0 * std::sqrt(expected)) << "z < -" << thresholds[t];
+    EXPECT_NEAR(above[t], expected, 5.0 * std::sqrt(expected)) << "z > " << thresholds[t];
+  }
+}
+
 // Normal 0 of each stream sets a realization's Phi(0), so its law across realizations (not along
-// one stream) decides the tails of Phi at every time. Counts beyond +-3 and +-3.5 over 2e6
-// streams are Poisson: within 5 of their standard deviations sqrt(expected).
+// one stream) decides the tails of Phi at every time. Counts beyond +-3, +-3.5 and +-4 over 2e6
+// streams are Poisson: within 5 of their standard deviations sqrt(expected) (63 expected beyond 4).
 TEST(NormalStream, FirstNormalAcrossRealizationsHasNormalTails) {
   const int n = 2000000;
-  const double thresholds[] = {3.0, 3.5};
-  for (double c : thresholds) {
-    long below = 0, above = 0;
-    for (int r = 0; r < n; ++r) {
-      const double z = gd::NormalStream(20180529, static_cast<std::uint64_t>(r)).at(0);
-      below += z < -c;
-      above += z > c;
+  const double thresholds[] = {3.0, 3.5, 4.0};
+  long below[3] = {0, 0, 0}, above[3] = {0, 0, 0};
+  for (int r = 0; r < n; ++r) {
+    const double z = gd::NormalStream(20180529, static_cast<std::uint64_t>(r)).at(0);
+    for (int t = 0; t < 3; ++t) {
+      below[t] += z < -thresholds[t];
+      above[t] += z > thresholds[t];
     }
-    const double expected = n * 0.5 * std::erfc(c / std::sqrt(2.0));
-    EXPECT_NEAR(below, expected, 5.0 * std::sqrt(expected)) << "z < -" << c;
-    EXPECT_NEAR(above, expected, 5.0 * std::sqrt(expected)) << "z > " << c;
+  }
+  for (int t = 0; t < 3; ++t) {
+    const double expected = n * 0.5 * std::erfc(thresholds[t] / std::sqrt(2.0));
+    EXPECT_NEAR(below[t], expected, 5.0 * std::sqrt(expected)) << "z < -" << thresholds[t];
+    EXPECT_NEAR(above[t], expected, 5.0 * std::sqrt(expected)) << "z > " << thresholds[t];
   }
 }
 

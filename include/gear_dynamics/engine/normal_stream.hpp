@@ -1,6 +1,8 @@
-// One counter-based stream of standard normals per realization (doc/model.md §4): Philox4x32-10
-// (bit for bit Random123's) keyed by (seed, realization), turned into normals by Box-Muller,
-// generated kBlockPairs counters at a time in SIMD.
+// One counter-based stream of standard normals per realization (doc/model.md §9): Philox4x32-10
+// (bit for bit Random123's) keyed by (seed, realization); normal 2p + j is Boost.Random's
+// 128-layer ziggurat (normal_distribution<double>) on word j of counter p, its rare retries on
+// words of that normal's own retry counters. The ziggurat's first test runs in SIMD,
+// kBlockPairs counters at a time; Boost's code does the rest.
 // Normal i of a stream depends only on (seed, realization, i), so a realization has the same path
 // whatever runs beside it, in whatever order, on however many threads.
 #pragma once
@@ -22,7 +24,8 @@ class NormalStream {
   void fill(std::uint64_t first, double* out, std::size_t count) const;
 
   // Philox4x32-10 output of the counters (p, p >> 32, seed_high, 0) for p = first_pair ...
-  // first_pair + kBlockPairs - 1, as the words w0 = out[1]:out[0] and w1 = out[3]:out[2].
+  // first_pair + kBlockPairs - 1, as the words w0 = out[1]:out[0] and w1 = out[3]:out[2]: the main
+  // words of normals 2p and 2p + 1.
   void philox(std::uint64_t first_pair, std::uint64_t* w0, std::uint64_t* w1) const;
 
  private:
@@ -35,8 +38,9 @@ class NormalStream {
 
 // The streams of kLanes realizations side by side, one per SIMD lane, all lanes at the same counter
 // (keys as vectors): lane l gives NormalStream(seed, realization[l])'s normals bit for bit (the same
-// Philox counters and keys, the same Box-Muller operations lane by lane), whatever the other lanes
-// hold. Ensemble draws its normals this way, straight into its lane-major chunk.
+// Philox counters and keys, the same ziggurat test lane by lane, the same slow path per normal),
+// whatever the other lanes hold. Ensemble draws its normals this way, straight into its lane-major
+// chunk.
 class NormalLanes {
  public:
   static constexpr int kLanes = 8;
