@@ -190,17 +190,91 @@ class ReplayEngine {
   unsigned drawn_ = 0;
 };
 
-// The slow path for the rejects of ziggurat_fast (add(index, chunk) puts each into a chunk):
-// Boost.Random's normal_distribution<double>(0, 1) in full on each one's engine (it repeats the
-// fast test on the main word and goes on to the wedge or the tail), kChunk at a time so that
-// their first retry words come from one SIMD Philox.
+#ifdef __AVX512DQ__
+// Boost.Random's wedge test, evaluated in SIMD on the slots 8 g ... 8 g + 7 of a chunk whose first
+// retry words are computed: Boost's algorithm (unit_normal_distribution::operator() in
+// normal_distribution.hpp, the reference test_random compares every normal with) from the point
+// where the main word failed the first test, with the same IEEE operations in the same order, so
+// the same doubles (the build contracts nothing). For layer i >= 1, y01 = uniform_01 on retry word
+// w0 and y = y_i + y01 (y_{i+1} - y_i); the chord and tangent bounds accept or reject. A rejected
+// normal tries again on w1 as its main word: the first test accepts it (97 %) or Boost takes over.
+// Boost's own code stays the fallback where these do not decide: the tail (layer 0), y between the
+// bounds (Boost compares with exp), a second rejection, or uniform_01 drawing again (w0 rounding
+// to 2^64). Stores the decided normals to value[8 g + l] and returns which lanes they are.
+__mmask8 wedge(const Rejected& chunk, int g, double* value) {
+  const double* const table_x = boost::random::detail::normal_table<double>::table_x;
+  const double* const table_y = boost::random::detail::normal_table<double>::table_y;
+  const __mmask8 filled = static_cast<__mmask8>((1u << std::clamp(chunk.count - 8 * g, 0, 8)) - 1);
+  const __m512i one = _mm512_set1_epi64(1), layer_bits = _mm512_set1_epi64(0x7F);
+  const __m512i clear_bit11 = _mm512_set1_epi64(static_cast<long long>(~(std::uint64_t{1} << 11)));
+  // The first test's x on a word, as in ziggurat_fast; x_i and x_{i+1} of its layer.
+  const auto first_test = [&](__m512i u, __m512i& layer, __m512d& x, __m512d& x_i, __m512d& x_next) {
+    layer = _mm512_and_si512(_mm512_srli_epi64(u, 1), layer_bits);
+    const __m512d r = _mm512_mul_pd(_mm512_cvtepu64_pd(_mm512_srli_epi64(_mm512_and_si512(u, clear_bit11), 8)),
+                                    _mm512_set1_pd(0x1p-56));
+    x_i = _mm512_i64gather_pd(layer, table_x, 8);
+    x_next = _mm512_i64gather_pd(layer, table_x + 1, 8);
+    x = _mm512_mul_pd(r, x_i);
+  };
+  const __m512i u = _mm512_loadu_si512(chunk.word + 8 * g);
+  __m512i layer;
+  __m512d x, x_i, x_next;
+  first_test(u, layer, x, x_i, x_next);
+  const __mmask8 in_wedge = _mm512_mask_test_epi64_mask(filled, layer, layer);  // layer >= 1
+  // uniform_01 on a 64-bit engine: word (rounded to nearest) / 2^64, drawn again if it gives 1.
+  const __m512d y01 = _mm512_mul_pd(_mm512_cvtepu64_pd(_mm512_load_si512(chunk.retry0 + 8 * g)), _mm512_set1_pd(0x1p-64));
+  const __mmask8 uniform = _mm512_mask_cmp_pd_mask(in_wedge, y01, _mm512_set1_pd(1.0), _CMP_LT_OQ);
+  const __m512d y_i = _mm512_i64gather_pd(layer, table_y, 8);
+  const __m512d y_next = _mm512_i64gather_pd(layer, table_y + 1, 8);
+  const __m512d y = _mm512_add_pd(y_i, _mm512_mul_pd(y01, _mm512_sub_pd(y_next, y_i)));
+  const __m512d x_i_minus_x = _mm512_sub_pd(x_i, x);
+  const __m512d chord = _mm512_sub_pd(_mm512_mul_pd(_mm512_sub_pd(x_i, x_next), y01), x_i_minus_x);
+  const __m512d tangent =
+      _mm512_sub_pd(y, _mm512_add_pd(y_i, _mm512_mul_pd(_mm512_mul_pd(x_i_minus_x, y_i), x_i)));
+  // Convex layers (x_i >= 1): y_above_ubound is the chord's, y_above_lbound the tangent's; concave
+  // the other way round.
+  const __mmask8 convex = _mm512_cmp_pd_mask(x_i, _mm512_set1_pd(1.0), _CMP_GE_OQ);
+  const __m512d above_ubound = _mm512_mask_blend_pd(convex, tangent, chord);
+  const __m512d above_lbound = _mm512_mask_blend_pd(convex, chord, tangent);
+  const __mmask8 below_ubound = _mm512_mask_cmp_pd_mask(uniform, above_ubound, _mm512_setzero_pd(), _CMP_LT_OQ);
+  const __mmask8 accepted = _mm512_mask_cmp_pd_mask(below_ubound, above_lbound, _mm512_setzero_pd(), _CMP_LT_OQ);
+  const __mmask8 rejected = static_cast<__mmask8>(uniform & ~below_ubound);
+  // Boost's next try: w1 is its main word.
+  const __m512i u2 = _mm512_load_si512(chunk.retry1 + 8 * g);
+  __m512i layer2;
+  __m512d x2, x2_i, x2_next;
+  first_test(u2, layer2, x2, x2_i, x2_next);
+  const __mmask8 retried = _mm512_mask_cmp_pd_mask(rejected, x2, x2_next, _CMP_LT_OQ);
+  // Boost's (x sign) 1 + 0 as in ziggurat_fast, with the sign of the accepted word.
+  const __m512d chosen = _mm512_mask_blend_pd(accepted, x2, x);
+  const __mmask8 negative =
+      (_mm512_testn_epi64_mask(u, one) & accepted) | (_mm512_testn_epi64_mask(u2, one) & retried);
+  _mm512_storeu_pd(value + 8 * g, _mm512_mask_sub_pd(chosen, negative, _mm512_setzero_pd(), chosen));
+  return accepted | retried;
+}
+#endif
+
+// The slow path for the rejects of ziggurat_fast (add(index, chunk) puts each into a chunk),
+// kChunk at a time so that their first retry words come from one SIMD Philox: Boost's wedge test
+// in SIMD (wedge() above) where AVX-512 is there, and Boost.Random's normal_distribution<double>(0, 1)
+// in full on the engine of each normal it does not decide (it repeats the first test on the main
+// word and goes on to the wedge or the tail).
 template <class Add>
 void slow_normals(const std::uint16_t* rejects, int count, Add add) {
   for (int start = 0; start < count; start += Rejected::kChunk) {
     Rejected chunk;
     for (int n = start; n < std::min(count, start + Rejected::kChunk); ++n) add(rejects[n], chunk);
     chunk.first_retry_words();
-    for (int i = 0; i < chunk.count; ++i) {
+    std::uint32_t undecided = (1u << chunk.count) - 1;
+#ifdef __AVX512DQ__
+    double value[Rejected::kChunk];
+    std::uint32_t decided = wedge(chunk, 0, value);
+    if (chunk.count > 8) decided |= std::uint32_t{wedge(chunk, 1, value)} << 8;
+    for (int i = 0; i < chunk.count; ++i) *chunk.out[i] = value[i];  // the undecided are overwritten below
+    undecided &= ~decided;
+#endif
+    for (; undecided != 0; undecided &= undecided - 1) {
+      const int i = __builtin_ctz(undecided);
       ReplayEngine engine(chunk, i);
       *chunk.out[i] = boost::random::normal_distribution<double>(0.0, 1.0)(engine);
     }
