@@ -34,6 +34,30 @@ inline void philox_one(std::uint64_t p, std::uint32_t seed_high, std::uint32_t c
   w1 = (c3 << 32) | c2;
 }
 
+#ifdef __AVX512F__
+// Philox4x32-10 on 8 counters side by side (AVX-512), one 32-bit word of the state in the low half
+// of each 64-bit lane. vpmuludq reads only the low halves, so the high halves may carry junk through
+// the rounds; philox_words clears them. A product's high half moves down by swapping the dwords of
+// each lane (vpshufd, a shuffle) rather than by a shift, which would compete with the multiplies for
+// the one port that runs both on 512-bit vectors.
+inline __m512i swap_halves(__m512i x) { return _mm512_shuffle_epi32(x, _MM_PERM_CDAB); }
+
+inline void philox_round(__m512i& c0, __m512i& c1, __m512i& c2, __m512i& c3, __m512i key0, __m512i key1) {
+  const __m512i p0 = _mm512_mul_epu32(c0, _mm512_set1_epi64(kPhiloxM0));
+  const __m512i p1 = _mm512_mul_epu32(c2, _mm512_set1_epi64(kPhiloxM1));
+  c0 = _mm512_xor_si512(_mm512_xor_si512(swap_halves(p1), c1), key0);
+  c1 = p1;
+  c2 = _mm512_xor_si512(_mm512_xor_si512(swap_halves(p0), c3), key1);
+  c3 = p0;
+}
+
+// The state's words as the 64-bit outputs w0 = c1:c0 and w1 = c3:c2.
+inline void philox_words(__m512i c0, __m512i c1, __m512i c2, __m512i c3, __m512i& w0, __m512i& w1) {
+  w0 = _mm512_mask_blend_epi32(0xAAAA, c0, swap_halves(c1));
+  w1 = _mm512_mask_blend_epi32(0xAAAA, c2, swap_halves(c3));
+}
+#endif
+
 // The fast path of Boost.Random's 128-layer ziggurat (normal_distribution.hpp, int_float_pair.hpp),
 // with Boost's own table, on vectors of 8 words: one 64-bit word gives the sign (bit 0), the layer
 // i (bits 1-7) and the uniform r = ((word with bit 11 cleared) >> 8) 2^-56 in [0, 1); x = r x_i is
@@ -125,8 +149,6 @@ struct Rejected {
   template <int G>
   void first_retry_words() {
     static_assert(8 * G <= kChunk);
-    const __m512i low = _mm512_set1_epi64(static_cast<long long>(kLow));
-    const __m512i m0 = _mm512_set1_epi64(kPhiloxM0), m1 = _mm512_set1_epi64(kPhiloxM1);
     const __m512i w0_step = _mm512_set1_epi64(kPhiloxW0), w1_step = _mm512_set1_epi64(kPhiloxW1);
     __m512i c0[G], c1[G], c2[G], c3v[G], key0[G], key1[G];
     for (int g = 0; g < G; ++g) {
@@ -143,19 +165,16 @@ struct Rejected {
     }
     for (int round = 0; round < 10; ++round) {
       for (int g = 0; g < G; ++g) {
-        const __m512i p0 = _mm512_mul_epu32(c0[g], m0);
-        const __m512i p1 = _mm512_mul_epu32(c2[g], m1);
-        c0[g] = _mm512_xor_si512(_mm512_xor_si512(_mm512_srli_epi64(p1, 32), c1[g]), key0[g]);
-        c1[g] = p1;
-        c2[g] = _mm512_xor_si512(_mm512_xor_si512(_mm512_srli_epi64(p0, 32), c3v[g]), key1[g]);
-        c3v[g] = p0;
+        philox_round(c0[g], c1[g], c2[g], c3v[g], key0[g], key1[g]);
         key0[g] = _mm512_add_epi32(key0[g], w0_step);
         key1[g] = _mm512_add_epi32(key1[g], w1_step);
       }
     }
     for (int g = 0; g < G; ++g) {
-      _mm512_store_si512(retry0 + 8 * g, _mm512_or_si512(_mm512_slli_epi64(c1[g], 32), _mm512_and_si512(c0[g], low)));
-      _mm512_store_si512(retry1 + 8 * g, _mm512_or_si512(_mm512_slli_epi64(c3v[g], 32), _mm512_and_si512(c2[g], low)));
+      __m512i w0, w1;
+      philox_words(c0[g], c1[g], c2[g], c3v[g], w0, w1);
+      _mm512_store_si512(retry0 + 8 * g, w0);
+      _mm512_store_si512(retry1 + 8 * g, w1);
     }
   }
 #endif
@@ -302,35 +321,27 @@ void NormalStream::philox(std::uint64_t first_pair, std::uint64_t* w0, std::uint
   // kGroups vectors of 8 counters advance together: the rounds are a latency chain, and
   // independent chains side by side keep the multipliers busy.
   constexpr int kGroups = 4;
-  const __m512i low = _mm512_set1_epi64(static_cast<long long>(kLow));
-  const __m512i m0 = _mm512_set1_epi64(kPhiloxM0), m1 = _mm512_set1_epi64(kPhiloxM1);
   const __m512i lane = _mm512_set_epi64(7, 6, 5, 4, 3, 2, 1, 0);
   for (; i + 8 * kGroups <= kBlockPairs; i += 8 * kGroups) {
     __m512i c0[kGroups], c1[kGroups], c2[kGroups], c3[kGroups];
     for (int g = 0; g < kGroups; ++g) {
-      const __m512i p = _mm512_add_epi64(_mm512_set1_epi64(static_cast<long long>(first_pair + i + 8 * g)), lane);
-      c0[g] = _mm512_and_si512(p, low);
-      c1[g] = _mm512_srli_epi64(p, 32);
+      c0[g] = _mm512_add_epi64(_mm512_set1_epi64(static_cast<long long>(first_pair + i + 8 * g)), lane);
+      c1[g] = _mm512_srli_epi64(c0[g], 32);
       c2[g] = _mm512_set1_epi64(seed_high_);
       c3[g] = _mm512_setzero_si512();
     }
     std::uint32_t k0 = key_[0], k1 = key_[1];
     for (int round = 0; round < 10; ++round) {
-      const __m512i key0 = _mm512_set1_epi64(k0), key1 = _mm512_set1_epi64(k1);
-      for (int g = 0; g < kGroups; ++g) {
-        const __m512i p0 = _mm512_mul_epu32(c0[g], m0);  // low 32 bits of each lane, 64-bit product
-        const __m512i p1 = _mm512_mul_epu32(c2[g], m1);
-        c0[g] = _mm512_xor_si512(_mm512_xor_si512(_mm512_srli_epi64(p1, 32), c1[g]), key0);
-        c1[g] = _mm512_and_si512(p1, low);
-        c2[g] = _mm512_xor_si512(_mm512_xor_si512(_mm512_srli_epi64(p0, 32), c3[g]), key1);
-        c3[g] = _mm512_and_si512(p0, low);
-      }
+      for (int g = 0; g < kGroups; ++g)
+        philox_round(c0[g], c1[g], c2[g], c3[g], _mm512_set1_epi64(k0), _mm512_set1_epi64(k1));
       k0 += kPhiloxW0;
       k1 += kPhiloxW1;
     }
     for (int g = 0; g < kGroups; ++g) {
-      _mm512_storeu_si512(w0 + i + 8 * g, _mm512_or_si512(_mm512_slli_epi64(c1[g], 32), c0[g]));
-      _mm512_storeu_si512(w1 + i + 8 * g, _mm512_or_si512(_mm512_slli_epi64(c3[g], 32), c2[g]));
+      __m512i word0, word1;
+      philox_words(c0[g], c1[g], c2[g], c3[g], word0, word1);
+      _mm512_storeu_si512(w0 + i + 8 * g, word0);
+      _mm512_storeu_si512(w1 + i + 8 * g, word1);
     }
   }
 #endif
@@ -378,8 +389,6 @@ void NormalLanes::block(std::uint64_t first_pair, double* out, std::ptrdiff_t st
   for (int i = 0; i < kBlockPairs; i += kGroups) {
 #ifdef __AVX512F__
     // NormalStream::philox with the counter the same in every lane and the keys per lane.
-    const __m512i low = _mm512_set1_epi64(static_cast<long long>(kLow));
-    const __m512i m0 = _mm512_set1_epi64(kPhiloxM0), m1 = _mm512_set1_epi64(kPhiloxM1);
     __m512i c0[kGroups], c1[kGroups], c2[kGroups], c3[kGroups];
     for (int g = 0; g < kGroups; ++g) {
       const std::uint64_t p = first_pair + static_cast<std::uint64_t>(i + g);
@@ -392,23 +401,16 @@ void NormalLanes::block(std::uint64_t first_pair, double* out, std::ptrdiff_t st
     __m512i key0 = _mm512_cvtepu32_epi64(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(key0_)));
     __m512i key1 = _mm512_cvtepu32_epi64(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(key1_)));
     const __m512i w0_step = _mm512_set1_epi64(kPhiloxW0), w1_step = _mm512_set1_epi64(kPhiloxW1);
-    // Only the low 32 bits of each word are the state: vpmuludq reads nothing else, so the high
-    // halves may carry junk through the rounds and are cleared once at the end.
     for (int round = 0; round < 10; ++round) {
-      for (int g = 0; g < kGroups; ++g) {
-        const __m512i p0 = _mm512_mul_epu32(c0[g], m0);
-        const __m512i p1 = _mm512_mul_epu32(c2[g], m1);
-        c0[g] = _mm512_xor_si512(_mm512_xor_si512(_mm512_srli_epi64(p1, 32), c1[g]), key0);
-        c1[g] = p1;
-        c2[g] = _mm512_xor_si512(_mm512_xor_si512(_mm512_srli_epi64(p0, 32), c3[g]), key1);
-        c3[g] = p0;
-      }
-      key0 = _mm512_add_epi32(key0, w0_step);  // the high halves stay 0
+      for (int g = 0; g < kGroups; ++g) philox_round(c0[g], c1[g], c2[g], c3[g], key0, key1);
+      key0 = _mm512_add_epi32(key0, w0_step);
       key1 = _mm512_add_epi32(key1, w1_step);
     }
     for (int g = 0; g < kGroups; ++g) {
-      _mm512_store_si512(words[i + g][0], _mm512_or_si512(_mm512_slli_epi64(c1[g], 32), _mm512_and_si512(c0[g], low)));
-      _mm512_store_si512(words[i + g][1], _mm512_or_si512(_mm512_slli_epi64(c3[g], 32), _mm512_and_si512(c2[g], low)));
+      __m512i w0, w1;
+      philox_words(c0[g], c1[g], c2[g], c3[g], w0, w1);
+      _mm512_store_si512(words[i + g][0], w0);
+      _mm512_store_si512(words[i + g][1], w1);
     }
 #else
     for (int g = 0; g < kGroups; ++g) {
