@@ -373,6 +373,10 @@ NormalLanes::NormalLanes(std::uint64_t seed, const std::uint64_t (&realizations)
     key0_[l] = stream.key_[0];
     key1_[l] = stream.key_[1];
     seed_high_[l] = stream.seed_high_;
+    for (int round = 0; round < 10; ++round) {  // uint32_t arithmetic: wraps as Philox's does
+      round_keys_[round][0][l] = key0_[l] + static_cast<std::uint32_t>(round) * kPhiloxW0;
+      round_keys_[round][1][l] = key1_[l] + static_cast<std::uint32_t>(round) * kPhiloxW1;
+    }
   }
 }
 
@@ -397,14 +401,9 @@ void NormalLanes::block(std::uint64_t first_pair, double* out, std::ptrdiff_t st
       c2[g] = _mm512_cvtepu32_epi64(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(seed_high_)));
       c3[g] = _mm512_setzero_si512();
     }
-    // 32-bit key words in 64-bit lanes; the 32-bit adds wrap as uint32_t does.
-    __m512i key0 = _mm512_cvtepu32_epi64(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(key0_)));
-    __m512i key1 = _mm512_cvtepu32_epi64(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(key1_)));
-    const __m512i w0_step = _mm512_set1_epi64(kPhiloxW0), w1_step = _mm512_set1_epi64(kPhiloxW1);
     for (int round = 0; round < 10; ++round) {
+      const __m512i key0 = _mm512_load_si512(round_keys_[round][0]), key1 = _mm512_load_si512(round_keys_[round][1]);
       for (int g = 0; g < kGroups; ++g) philox_round(c0[g], c1[g], c2[g], c3[g], key0, key1);
-      key0 = _mm512_add_epi32(key0, w0_step);
-      key1 = _mm512_add_epi32(key1, w1_step);
     }
     for (int g = 0; g < kGroups; ++g) {
       __m512i w0, w1;

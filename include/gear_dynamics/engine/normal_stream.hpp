@@ -54,6 +54,9 @@ class NormalLanes {
 
  private:
   std::uint32_t key0_[kLanes], key1_[kLanes], seed_high_[kLanes];
+  // Each lane's two key words in each of Philox's 10 rounds (32-bit values in 64-bit slots), so
+  // that the rounds read them instead of adding the key schedule's steps.
+  alignas(64) std::uint64_t round_keys_[10][2][kLanes];
 };
 
 }  // namespace gear_dynamics
