@@ -65,15 +65,42 @@ inline void philox_words(__m512i c0, __m512i c1, __m512i c2, __m512i c3, __m512i
 // 0 - x (so -0 becomes +0). Integer operations, a conversion of a 56-bit integer rounded to nearest
 // and two multiplications: the SIMD and the plain loop agree bit for bit.
 //
-// words[8 v + l] is word l of vector v, for first <= v < last; an accepted normal goes to
-// out(v)[l], the index 8 v + l of each other one to rejects, in order (rejects needs room for 8
-// more than the count). Returns how many were rejected.
+// words[8 v + l] is word l of vector v, for first <= v < last <= first + 8; an accepted normal
+// goes to out(v)[l], the index 8 v + l of each other one to rejects, in order (rejects needs room
+// for kRejectsSlack more than the count). Returns how many were rejected.
+constexpr int kRejectsSlack = 32;
 template <class Out>
 int ziggurat_fast(const std::uint64_t* words, int first, int last, Out out, std::uint16_t* rejects) {
   const double* const table_x = boost::random::detail::normal_table<double>::table_x;
   constexpr std::uint64_t kClearBit11 = ~(std::uint64_t{1} << 11);
   int count = 0;
-#ifdef __AVX512DQ__
+#if defined(__AVX512DQ__) && defined(__AVX512VBMI2__)
+  // Each vector's rejected lanes as one byte of a 64-bit mask; their indices packed at the end by
+  // two compressions of 32 16-bit lanes (in registers, stored whole: a compressing store to memory
+  // is microcoded and slow). No branch on data that is random by design.
+  std::uint64_t rejected = 0;
+  for (int v = first; v < last; ++v) {
+    const __m512i u = _mm512_loadu_si512(words + 8 * v);
+    const __m512i layer = _mm512_and_si512(_mm512_srli_epi64(u, 1), _mm512_set1_epi64(0x7F));
+    const __m512i bits = _mm512_srli_epi64(_mm512_and_si512(u, _mm512_set1_epi64(static_cast<long long>(kClearBit11))), 8);
+    const __m512d r = _mm512_mul_pd(_mm512_cvtepu64_pd(bits), _mm512_set1_pd(0x1p-56));
+    const __m512d x = _mm512_mul_pd(r, _mm512_i64gather_pd(layer, table_x, 8));
+    const __mmask8 accepted = _mm512_cmp_pd_mask(x, _mm512_i64gather_pd(layer, table_x + 1, 8), _CMP_LT_OQ);
+    const __mmask8 negative = _mm512_testn_epi64_mask(u, _mm512_set1_epi64(1));
+    _mm512_mask_storeu_pd(out(v), accepted, _mm512_mask_sub_pd(x, negative, _mm512_setzero_pd(), x));
+    rejected |= std::uint64_t{static_cast<std::uint8_t>(~accepted)} << (8 * (v - first));
+  }
+  const __m512i index = _mm512_add_epi16(
+      _mm512_set1_epi16(static_cast<short>(8 * first)),
+      _mm512_set_epi16(31, 30, 29, 28, 27, 26, 25, 24, 23, 22, 21, 20, 19, 18, 17, 16, 15, 14, 13, 12, 11, 10, 9, 8,
+                       7, 6, 5, 4, 3, 2, 1, 0));
+  for (int half = 0; half < 2; ++half) {
+    const auto lanes = static_cast<__mmask32>(rejected >> (32 * half));
+    _mm512_storeu_si512(rejects + count,
+                        _mm512_maskz_compress_epi16(lanes, _mm512_add_epi16(index, _mm512_set1_epi16(static_cast<short>(32 * half)))));
+    count += __builtin_popcount(lanes);
+  }
+#elif defined(__AVX512DQ__)
   const __m512i lane = _mm512_set_epi64(7, 6, 5, 4, 3, 2, 1, 0);
   for (int v = first; v < last; ++v) {
     const __m512i u = _mm512_loadu_si512(words + 8 * v);
@@ -355,7 +382,8 @@ void NormalStream::block(std::uint64_t first_pair, double* out) const {
   philox(first_pair, words[0], words[1]);
   alignas(64) double normals[2][kBlockPairs];
   constexpr int kVectors = 2 * kBlockPairs / 8;
-  std::uint16_t rejects[2 * kBlockPairs + 8];
+  static_assert(kVectors <= 8, "ziggurat_fast takes up to 8 vectors at a time");
+  std::uint16_t rejects[2 * kBlockPairs + kRejectsSlack];
   const int count = ziggurat_fast(&words[0][0], 0, kVectors, [&](int v) { return &normals[0][0] + 8 * v; }, rejects);
   slow_normals(rejects, count, [&](int index, Rejected& chunk) {
     const int j = index / kBlockPairs, i = index % kBlockPairs;
@@ -383,11 +411,11 @@ NormalLanes::NormalLanes(std::uint64_t seed, const std::uint64_t (&realizations)
 void NormalLanes::block(std::uint64_t first_pair, double* out, std::ptrdiff_t stride) const {
   // kGroups counters at a time: independent Philox chains side by side.
   constexpr int kGroups = 4;
-  static_assert(kBlockPairs % kGroups == 0);
+  static_assert(kBlockPairs % kGroups == 0 && 2 * kGroups <= 8);  // ziggurat_fast: up to 8 vectors at a time
   // words[i][j][l]: word j of counter first_pair + i of lane l, the main word of the lane's normal
   // k = 2 (first_pair + i) + j, which goes to out[k * stride + l]; vector k of 8 words.
   alignas(64) std::uint64_t words[kBlockPairs][2][kLanes];
-  std::uint16_t rejects[2 * kBlockPairs * kLanes + 8];
+  std::uint16_t rejects[2 * kBlockPairs * kLanes + kRejectsSlack];
   int count = 0;
   const auto normals = [&](int k) { return out + k * stride; };
   for (int i = 0; i < kBlockPairs; i += kGroups) {
