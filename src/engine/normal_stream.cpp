@@ -242,11 +242,31 @@ class ReplayEngine {
 // normal_distribution.hpp, the reference test_random compares every normal with) from the point
 // where the main word failed the first test, with the same IEEE operations in the same order, so
 // the same doubles (the build contracts nothing). For layer i >= 1, y01 = uniform_01 on retry word
-// w0 and y = y_i + y01 (y_{i+1} - y_i); the chord and tangent bounds accept or reject. A rejected
-// normal tries again on w1 as its main word: the first test accepts it (97 %) or Boost takes over.
-// Boost's own code stays the fallback where these do not decide: the tail (layer 0), y between the
-// bounds (Boost compares with exp), a second rejection, or uniform_01 drawing again (w0 rounding
-// to 2^64). Stores the decided normals to value[8 g + l] and returns which lanes they are.
+// w0 and y = y_i + y01 (y_{i+1} - y_i); the chord and tangent bounds accept or reject, and between
+// them the comparison with e^{-x^2/2}, where an approximation decides it. A rejected normal tries
+// again on w1 as its main word: the first test accepts it (97 %) or Boost takes over. Boost's own
+// code stays the fallback where these do not decide: the tail (layer 0), a second rejection, y
+// within 1e-12 relative of e^{-x^2/2}, or uniform_01 drawing again (w0 rounding to 2^64). Stores
+// the decided normals to value[8 g + l] and returns which lanes they are.
+// e^a for -8 < a <= 0 within about 1e-15 relative (a = k ln 2 + r, |r| <= ln 2 / 2, by Cody and
+// Waite's two-part ln 2; e^r by its Taylor polynomial to degree 13, whose remainder is below
+// 1e-17): not glibc's exp, only close enough to tell on which side of it a number 1e-12 away lies.
+inline __m512d exp_near(__m512d a) {
+  const __m512d k = _mm512_roundscale_pd(_mm512_mul_pd(a, _mm512_set1_pd(1.4426950408889634)), _MM_FROUND_TO_NEAREST_INT);
+  const __m512d r = _mm512_fnmadd_pd(k, _mm512_set1_pd(1.90821492927058770002e-10),  // ln 2 - ln2_hi
+                                     _mm512_fnmadd_pd(k, _mm512_set1_pd(6.93147180369123816490e-01), a));  // ln2_hi: k ln2_hi is exact
+  struct InverseFactorials {
+    double value[14];
+    constexpr InverseFactorials() : value{1.0} {
+      for (int n = 1; n < 14; ++n) value[n] = value[n - 1] / n;
+    }
+  };
+  static constexpr InverseFactorials kTaylor;
+  __m512d p = _mm512_set1_pd(kTaylor.value[13]);
+  for (int n = 12; n >= 0; --n) p = _mm512_fmadd_pd(p, r, _mm512_set1_pd(kTaylor.value[n]));
+  return _mm512_scalef_pd(p, k);
+}
+
 __mmask8 wedge(const Rejected& chunk, int g, double* value) {
   const double* const table_x = boost::random::detail::normal_table<double>::table_x;
   const double* const table_y = boost::random::detail::normal_table<double>::table_y;
@@ -283,8 +303,15 @@ __mmask8 wedge(const Rejected& chunk, int g, double* value) {
   const __m512d above_ubound = _mm512_mask_blend_pd(convex, tangent, chord);
   const __m512d above_lbound = _mm512_mask_blend_pd(convex, chord, tangent);
   const __mmask8 below_ubound = _mm512_mask_cmp_pd_mask(uniform, above_ubound, _mm512_setzero_pd(), _CMP_LT_OQ);
-  const __mmask8 accepted = _mm512_mask_cmp_pd_mask(below_ubound, above_lbound, _mm512_setzero_pd(), _CMP_LT_OQ);
-  const __mmask8 rejected = static_cast<__mmask8>(uniform & ~below_ubound);
+  const __mmask8 below_lbound = _mm512_mask_cmp_pd_mask(below_ubound, above_lbound, _mm512_setzero_pd(), _CMP_LT_OQ);
+  // Between the bounds Boost accepts if y < exp(-(x x / 2)) (glibc's exp); exp_near decides it where
+  // y is further than 1e-12 relative from the curve, far beyond both functions' errors.
+  const __mmask8 between = static_cast<__mmask8>(below_ubound & ~below_lbound);
+  const __m512d curve = exp_near(_mm512_sub_pd(_mm512_setzero_pd(), _mm512_div_pd(_mm512_mul_pd(x, x), _mm512_set1_pd(2.0))));
+  const __mmask8 below_curve = _mm512_mask_cmp_pd_mask(between, y, _mm512_mul_pd(curve, _mm512_set1_pd(1 - 1e-12)), _CMP_LT_OQ);
+  const __mmask8 above_curve = _mm512_mask_cmp_pd_mask(between, y, _mm512_mul_pd(curve, _mm512_set1_pd(1 + 1e-12)), _CMP_GT_OQ);
+  const __mmask8 accepted = below_lbound | below_curve;
+  const __mmask8 rejected = static_cast<__mmask8>((uniform & ~below_ubound) | above_curve);
   // Boost's next try: w1 is its main word.
   const __m512i u2 = _mm512_load_si512(chunk.retry1 + 8 * g);
   __m512i layer2;
