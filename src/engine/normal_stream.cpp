@@ -282,7 +282,7 @@ __mmask8 wedge(const Rejected& chunk, int g, double* value) {
     x_next = _mm512_i64gather_pd(layer, table_x + 1, 8);
     x = _mm512_mul_pd(r, x_i);
   };
-  const __m512i u = _mm512_loadu_si512(chunk.word + 8 * g);
+  const __m512i u = _mm512_maskz_loadu_epi64(filled, chunk.word + 8 * g);  // slots past count: zeros
   __m512i layer;
   __m512d x, x_i, x_next;
   first_test(u, layer, x, x_i, x_next);
