@@ -34,6 +34,30 @@ inline void philox_one(std::uint64_t p, std::uint32_t seed_high, std::uint32_t c
   w1 = (c3 << 32) | c2;
 }
 
+#ifdef __AVX512F__
+// Philox4x32-10 on 8 counters side by side (AVX-512), one 32-bit word of the state in the low half
+// of each 64-bit lane. vpmuludq reads only the low halves, so the high halves may carry junk through
+// the rounds; philox_words clears them. A product's high half moves down by swapping the dwords of
+// each lane (vpshufd, a shuffle) rather than by a shift, which would compete with the multiplies for
+// the one port that runs both on 512-bit vectors.
+inline __m512i swap_halves(__m512i x) { return _mm512_shuffle_epi32(x, _MM_PERM_CDAB); }
+
+inline void philox_round(__m512i& c0, __m512i& c1, __m512i& c2, __m512i& c3, __m512i key0, __m512i key1) {
+  const __m512i p0 = _mm512_mul_epu32(c0, _mm512_set1_epi64(kPhiloxM0));
+  const __m512i p1 = _mm512_mul_epu32(c2, _mm512_set1_epi64(kPhiloxM1));
+  c0 = _mm512_xor_si512(_mm512_xor_si512(swap_halves(p1), c1), key0);
+  c1 = p1;
+  c2 = _mm512_xor_si512(_mm512_xor_si512(swap_halves(p0), c3), key1);
+  c3 = p0;
+}
+
+// The state's words as the 64-bit outputs w0 = c1:c0 and w1 = c3:c2.
+inline void philox_words(__m512i c0, __m512i c1, __m512i c2, __m512i c3, __m512i& w0, __m512i& w1) {
+  w0 = _mm512_mask_blend_epi32(0xAAAA, c0, swap_halves(c1));
+  w1 = _mm512_mask_blend_epi32(0xAAAA, c2, swap_halves(c3));
+}
+#endif
+
 // The fast path of Boost.Random's 128-layer ziggurat (normal_distribution.hpp, int_float_pair.hpp),
 // with Boost's own table, on vectors of 8 words: one 64-bit word gives the sign (bit 0), the layer
 // i (bits 1-7) and the uniform r = ((word with bit 11 cleared) >> 8) 2^-56 in [0, 1); x = r x_i is
@@ -41,15 +65,42 @@ inline void philox_one(std::uint64_t p, std::uint32_t seed_high, std::uint32_t c
 // 0 - x (so -0 becomes +0). Integer operations, a conversion of a 56-bit integer rounded to nearest
 // and two multiplications: the SIMD and the plain loop agree bit for bit.
 //
-// words[8 v + l] is word l of vector v, for first <= v < last; an accepted normal goes to
-// out(v)[l], the index 8 v + l of each other one to rejects, in order (rejects needs room for 8
-// more than the count). Returns how many were rejected.
+// words[8 v + l] is word l of vector v, for first <= v < last <= first + 8; an accepted normal
+// goes to out(v)[l], the index 8 v + l of each other one to rejects, in order (rejects needs room
+// for kRejectsSlack more than the count). Returns how many were rejected.
+constexpr int kRejectsSlack = 32;
 template <class Out>
 int ziggurat_fast(const std::uint64_t* words, int first, int last, Out out, std::uint16_t* rejects) {
   const double* const table_x = boost::random::detail::normal_table<double>::table_x;
   constexpr std::uint64_t kClearBit11 = ~(std::uint64_t{1} << 11);
   int count = 0;
-#ifdef __AVX512DQ__
+#if defined(__AVX512DQ__) && defined(__AVX512VBMI2__)
+  // Each vector's rejected lanes as one byte of a 64-bit mask; their indices packed at the end by
+  // two compressions of 32 16-bit lanes (in registers, stored whole: a compressing store to memory
+  // is microcoded and slow). No branch on data that is random by design.
+  std::uint64_t rejected = 0;
+  for (int v = first; v < last; ++v) {
+    const __m512i u = _mm512_loadu_si512(words + 8 * v);
+    const __m512i layer = _mm512_and_si512(_mm512_srli_epi64(u, 1), _mm512_set1_epi64(0x7F));
+    const __m512i bits = _mm512_srli_epi64(_mm512_and_si512(u, _mm512_set1_epi64(static_cast<long long>(kClearBit11))), 8);
+    const __m512d r = _mm512_mul_pd(_mm512_cvtepu64_pd(bits), _mm512_set1_pd(0x1p-56));
+    const __m512d x = _mm512_mul_pd(r, _mm512_i64gather_pd(layer, table_x, 8));
+    const __mmask8 accepted = _mm512_cmp_pd_mask(x, _mm512_i64gather_pd(layer, table_x + 1, 8), _CMP_LT_OQ);
+    const __mmask8 negative = _mm512_testn_epi64_mask(u, _mm512_set1_epi64(1));
+    _mm512_mask_storeu_pd(out(v), accepted, _mm512_mask_sub_pd(x, negative, _mm512_setzero_pd(), x));
+    rejected |= std::uint64_t{static_cast<std::uint8_t>(~accepted)} << (8 * (v - first));
+  }
+  const __m512i index = _mm512_add_epi16(
+      _mm512_set1_epi16(static_cast<short>(8 * first)),
+      _mm512_set_epi16(31, 30, 29, 28, 27, 26, 25, 24, 23, 22, 21, 20, 19, 18, 17, 16, 15, 14, 13, 12, 11, 10, 9, 8,
+                       7, 6, 5, 4, 3, 2, 1, 0));
+  for (int half = 0; half < 2; ++half) {
+    const auto lanes = static_cast<__mmask32>(rejected >> (32 * half));
+    _mm512_storeu_si512(rejects + count,
+                        _mm512_maskz_compress_epi16(lanes, _mm512_add_epi16(index, _mm512_set1_epi16(static_cast<short>(32 * half)))));
+    count += __builtin_popcount(lanes);
+  }
+#elif defined(__AVX512DQ__)
   const __m512i lane = _mm512_set_epi64(7, 6, 5, 4, 3, 2, 1, 0);
   for (int v = first; v < last; ++v) {
     const __m512i u = _mm512_loadu_si512(words + 8 * v);
@@ -125,8 +176,6 @@ struct Rejected {
   template <int G>
   void first_retry_words() {
     static_assert(8 * G <= kChunk);
-    const __m512i low = _mm512_set1_epi64(static_cast<long long>(kLow));
-    const __m512i m0 = _mm512_set1_epi64(kPhiloxM0), m1 = _mm512_set1_epi64(kPhiloxM1);
     const __m512i w0_step = _mm512_set1_epi64(kPhiloxW0), w1_step = _mm512_set1_epi64(kPhiloxW1);
     __m512i c0[G], c1[G], c2[G], c3v[G], key0[G], key1[G];
     for (int g = 0; g < G; ++g) {
@@ -143,19 +192,16 @@ struct Rejected {
     }
     for (int round = 0; round < 10; ++round) {
       for (int g = 0; g < G; ++g) {
-        const __m512i p0 = _mm512_mul_epu32(c0[g], m0);
-        const __m512i p1 = _mm512_mul_epu32(c2[g], m1);
-        c0[g] = _mm512_xor_si512(_mm512_xor_si512(_mm512_srli_epi64(p1, 32), c1[g]), key0[g]);
-        c1[g] = p1;
-        c2[g] = _mm512_xor_si512(_mm512_xor_si512(_mm512_srli_epi64(p0, 32), c3v[g]), key1[g]);
-        c3v[g] = p0;
+        philox_round(c0[g], c1[g], c2[g], c3v[g], key0[g], key1[g]);
         key0[g] = _mm512_add_epi32(key0[g], w0_step);
         key1[g] = _mm512_add_epi32(key1[g], w1_step);
       }
     }
     for (int g = 0; g < G; ++g) {
-      _mm512_store_si512(retry0 + 8 * g, _mm512_or_si512(_mm512_slli_epi64(c1[g], 32), _mm512_and_si512(c0[g], low)));
-      _mm512_store_si512(retry1 + 8 * g, _mm512_or_si512(_mm512_slli_epi64(c3v[g], 32), _mm512_and_si512(c2[g], low)));
+      __m512i w0, w1;
+      philox_words(c0[g], c1[g], c2[g], c3v[g], w0, w1);
+      _mm512_store_si512(retry0 + 8 * g, w0);
+      _mm512_store_si512(retry1 + 8 * g, w1);
     }
   }
 #endif
@@ -190,17 +236,118 @@ class ReplayEngine {
   unsigned drawn_ = 0;
 };
 
-// The slow path for the rejects of ziggurat_fast (add(index, chunk) puts each into a chunk):
-// Boost.Random's normal_distribution<double>(0, 1) in full on each one's engine (it repeats the
-// fast test on the main word and goes on to the wedge or the tail), kChunk at a time so that
-// their first retry words come from one SIMD Philox.
+#ifdef __AVX512DQ__
+// Boost.Random's wedge test, evaluated in SIMD on the slots 8 g ... 8 g + 7 of a chunk whose first
+// retry words are computed: Boost's algorithm (unit_normal_distribution::operator() in
+// normal_distribution.hpp, the reference test_random compares every normal with) from the point
+// where the main word failed the first test, with the same IEEE operations in the same order, so
+// the same doubles (the build contracts nothing). For layer i >= 1, y01 = uniform_01 on retry word
+// w0 and y = y_i + y01 (y_{i+1} - y_i); the chord and tangent bounds accept or reject, and between
+// them the comparison with e^{-x^2/2}, where an approximation decides it. A rejected normal tries
+// again on w1 as its main word: the first test accepts it (97 %) or Boost takes over. Boost's own
+// code stays the fallback where these do not decide: the tail (layer 0), a second rejection, y
+// within 1e-12 relative of e^{-x^2/2}, or uniform_01 drawing again (w0 rounding to 2^64). Stores
+// the decided normals to value[8 g + l] and returns which lanes they are.
+// e^a for -8 < a <= 0 within about 1e-15 relative (a = k ln 2 + r, |r| <= ln 2 / 2, by Cody and
+// Waite's two-part ln 2; e^r by its Taylor polynomial to degree 13, whose remainder is below
+// 1e-17): not glibc's exp, only close enough to tell on which side of it a number 1e-12 away lies.
+inline __m512d exp_near(__m512d a) {
+  const __m512d k = _mm512_roundscale_pd(_mm512_mul_pd(a, _mm512_set1_pd(1.4426950408889634)), _MM_FROUND_TO_NEAREST_INT);
+  const __m512d r = _mm512_fnmadd_pd(k, _mm512_set1_pd(1.90821492927058770002e-10),  // ln 2 - ln2_hi
+                                     _mm512_fnmadd_pd(k, _mm512_set1_pd(6.93147180369123816490e-01), a));  // ln2_hi: k ln2_hi is exact
+  struct InverseFactorials {
+    double value[14];
+    constexpr InverseFactorials() : value{1.0} {
+      for (int n = 1; n < 14; ++n) value[n] = value[n - 1] / n;
+    }
+  };
+  static constexpr InverseFactorials kTaylor;
+  __m512d p = _mm512_set1_pd(kTaylor.value[13]);
+  for (int n = 12; n >= 0; --n) p = _mm512_fmadd_pd(p, r, _mm512_set1_pd(kTaylor.value[n]));
+  return _mm512_scalef_pd(p, k);
+}
+
+__mmask8 wedge(const Rejected& chunk, int g, double* value) {
+  const double* const table_x = boost::random::detail::normal_table<double>::table_x;
+  const double* const table_y = boost::random::detail::normal_table<double>::table_y;
+  const __mmask8 filled = static_cast<__mmask8>((1u << std::clamp(chunk.count - 8 * g, 0, 8)) - 1);
+  const __m512i one = _mm512_set1_epi64(1), layer_bits = _mm512_set1_epi64(0x7F);
+  const __m512i clear_bit11 = _mm512_set1_epi64(static_cast<long long>(~(std::uint64_t{1} << 11)));
+  // The first test's x on a word, as in ziggurat_fast; x_i and x_{i+1} of its layer.
+  const auto first_test = [&](__m512i u, __m512i& layer, __m512d& x, __m512d& x_i, __m512d& x_next) {
+    layer = _mm512_and_si512(_mm512_srli_epi64(u, 1), layer_bits);
+    const __m512d r = _mm512_mul_pd(_mm512_cvtepu64_pd(_mm512_srli_epi64(_mm512_and_si512(u, clear_bit11), 8)),
+                                    _mm512_set1_pd(0x1p-56));
+    x_i = _mm512_i64gather_pd(layer, table_x, 8);
+    x_next = _mm512_i64gather_pd(layer, table_x + 1, 8);
+    x = _mm512_mul_pd(r, x_i);
+  };
+  const __m512i u = _mm512_maskz_loadu_epi64(filled, chunk.word + 8 * g);  // slots past count: zeros
+  __m512i layer;
+  __m512d x, x_i, x_next;
+  first_test(u, layer, x, x_i, x_next);
+  const __mmask8 in_wedge = _mm512_mask_test_epi64_mask(filled, layer, layer);  // layer >= 1
+  // uniform_01 on a 64-bit engine: word (rounded to nearest) / 2^64, drawn again if it gives 1.
+  const __m512d y01 = _mm512_mul_pd(_mm512_cvtepu64_pd(_mm512_load_si512(chunk.retry0 + 8 * g)), _mm512_set1_pd(0x1p-64));
+  const __mmask8 uniform = _mm512_mask_cmp_pd_mask(in_wedge, y01, _mm512_set1_pd(1.0), _CMP_LT_OQ);
+  const __m512d y_i = _mm512_i64gather_pd(layer, table_y, 8);
+  const __m512d y_next = _mm512_i64gather_pd(layer, table_y + 1, 8);
+  const __m512d y = _mm512_add_pd(y_i, _mm512_mul_pd(y01, _mm512_sub_pd(y_next, y_i)));
+  const __m512d x_i_minus_x = _mm512_sub_pd(x_i, x);
+  const __m512d chord = _mm512_sub_pd(_mm512_mul_pd(_mm512_sub_pd(x_i, x_next), y01), x_i_minus_x);
+  const __m512d tangent =
+      _mm512_sub_pd(y, _mm512_add_pd(y_i, _mm512_mul_pd(_mm512_mul_pd(x_i_minus_x, y_i), x_i)));
+  // Convex layers (x_i >= 1): y_above_ubound is the chord's, y_above_lbound the tangent's; concave
+  // the other way round.
+  const __mmask8 convex = _mm512_cmp_pd_mask(x_i, _mm512_set1_pd(1.0), _CMP_GE_OQ);
+  const __m512d above_ubound = _mm512_mask_blend_pd(convex, tangent, chord);
+  const __m512d above_lbound = _mm512_mask_blend_pd(convex, chord, tangent);
+  const __mmask8 below_ubound = _mm512_mask_cmp_pd_mask(uniform, above_ubound, _mm512_setzero_pd(), _CMP_LT_OQ);
+  const __mmask8 below_lbound = _mm512_mask_cmp_pd_mask(below_ubound, above_lbound, _mm512_setzero_pd(), _CMP_LT_OQ);
+  // Between the bounds Boost accepts if y < exp(-(x x / 2)) (glibc's exp); exp_near decides it where
+  // y is further than 1e-12 relative from the curve, far beyond both functions' errors.
+  const __mmask8 between = static_cast<__mmask8>(below_ubound & ~below_lbound);
+  const __m512d curve = exp_near(_mm512_sub_pd(_mm512_setzero_pd(), _mm512_div_pd(_mm512_mul_pd(x, x), _mm512_set1_pd(2.0))));
+  const __mmask8 below_curve = _mm512_mask_cmp_pd_mask(between, y, _mm512_mul_pd(curve, _mm512_set1_pd(1 - 1e-12)), _CMP_LT_OQ);
+  const __mmask8 above_curve = _mm512_mask_cmp_pd_mask(between, y, _mm512_mul_pd(curve, _mm512_set1_pd(1 + 1e-12)), _CMP_GT_OQ);
+  const __mmask8 accepted = below_lbound | below_curve;
+  const __mmask8 rejected = static_cast<__mmask8>((uniform & ~below_ubound) | above_curve);
+  // Boost's next try: w1 is its main word.
+  const __m512i u2 = _mm512_load_si512(chunk.retry1 + 8 * g);
+  __m512i layer2;
+  __m512d x2, x2_i, x2_next;
+  first_test(u2, layer2, x2, x2_i, x2_next);
+  const __mmask8 retried = _mm512_mask_cmp_pd_mask(rejected, x2, x2_next, _CMP_LT_OQ);
+  // Boost's (x sign) 1 + 0 as in ziggurat_fast, with the sign of the accepted word.
+  const __m512d chosen = _mm512_mask_blend_pd(accepted, x2, x);
+  const __mmask8 negative =
+      (_mm512_testn_epi64_mask(u, one) & accepted) | (_mm512_testn_epi64_mask(u2, one) & retried);
+  _mm512_storeu_pd(value + 8 * g, _mm512_mask_sub_pd(chosen, negative, _mm512_setzero_pd(), chosen));
+  return accepted | retried;
+}
+#endif
+
+// The slow path for the rejects of ziggurat_fast (add(index, chunk) puts each into a chunk),
+// kChunk at a time so that their first retry words come from one SIMD Philox: Boost's wedge test
+// in SIMD (wedge() above) where AVX-512 is there, and Boost.Random's normal_distribution<double>(0, 1)
+// in full on the engine of each normal it does not decide (it repeats the first test on the main
+// word and goes on to the wedge or the tail).
 template <class Add>
 void slow_normals(const std::uint16_t* rejects, int count, Add add) {
   for (int start = 0; start < count; start += Rejected::kChunk) {
     Rejected chunk;
     for (int n = start; n < std::min(count, start + Rejected::kChunk); ++n) add(rejects[n], chunk);
     chunk.first_retry_words();
-    for (int i = 0; i < chunk.count; ++i) {
+    std::uint32_t undecided = (1u << chunk.count) - 1;
+#ifdef __AVX512DQ__
+    double value[Rejected::kChunk];
+    std::uint32_t decided = wedge(chunk, 0, value);
+    if (chunk.count > 8) decided |= std::uint32_t{wedge(chunk, 1, value)} << 8;
+    for (int i = 0; i < chunk.count; ++i) *chunk.out[i] = value[i];  // the undecided are overwritten below
+    undecided &= ~decided;
+#endif
+    for (; undecided != 0; undecided &= undecided - 1) {
+      const int i = __builtin_ctz(undecided);
       ReplayEngine engine(chunk, i);
       *chunk.out[i] = boost::random::normal_distribution<double>(0.0, 1.0)(engine);
     }
@@ -228,35 +375,27 @@ void NormalStream::philox(std::uint64_t first_pair, std::uint64_t* w0, std::uint
   // kGroups vectors of 8 counters advance together: the rounds are a latency chain, and
   // independent chains side by side keep the multipliers busy.
   constexpr int kGroups = 4;
-  const __m512i low = _mm512_set1_epi64(static_cast<long long>(kLow));
-  const __m512i m0 = _mm512_set1_epi64(kPhiloxM0), m1 = _mm512_set1_epi64(kPhiloxM1);
   const __m512i lane = _mm512_set_epi64(7, 6, 5, 4, 3, 2, 1, 0);
   for (; i + 8 * kGroups <= kBlockPairs; i += 8 * kGroups) {
     __m512i c0[kGroups], c1[kGroups], c2[kGroups], c3[kGroups];
     for (int g = 0; g < kGroups; ++g) {
-      const __m512i p = _mm512_add_epi64(_mm512_set1_epi64(static_cast<long long>(first_pair + i + 8 * g)), lane);
-      c0[g] = _mm512_and_si512(p, low);
-      c1[g] = _mm512_srli_epi64(p, 32);
+      c0[g] = _mm512_add_epi64(_mm512_set1_epi64(static_cast<long long>(first_pair + i + 8 * g)), lane);
+      c1[g] = _mm512_srli_epi64(c0[g], 32);
       c2[g] = _mm512_set1_epi64(seed_high_);
       c3[g] = _mm512_setzero_si512();
     }
     std::uint32_t k0 = key_[0], k1 = key_[1];
     for (int round = 0; round < 10; ++round) {
-      const __m512i key0 = _mm512_set1_epi64(k0), key1 = _mm512_set1_epi64(k1);
-      for (int g = 0; g < kGroups; ++g) {
-        const __m512i p0 = _mm512_mul_epu32(c0[g], m0);  // low 32 bits of each lane, 64-bit product
-        const __m512i p1 = _mm512_mul_epu32(c2[g], m1);
-        c0[g] = _mm512_xor_si512(_mm512_xor_si512(_mm512_srli_epi64(p1, 32), c1[g]), key0);
-        c1[g] = _mm512_and_si512(p1, low);
-        c2[g] = _mm512_xor_si512(_mm512_xor_si512(_mm512_srli_epi64(p0, 32), c3[g]), key1);
-        c3[g] = _mm512_and_si512(p0, low);
-      }
+      for (int g = 0; g < kGroups; ++g)
+        philox_round(c0[g], c1[g], c2[g], c3[g], _mm512_set1_epi64(k0), _mm512_set1_epi64(k1));
       k0 += kPhiloxW0;
       k1 += kPhiloxW1;
     }
     for (int g = 0; g < kGroups; ++g) {
-      _mm512_storeu_si512(w0 + i + 8 * g, _mm512_or_si512(_mm512_slli_epi64(c1[g], 32), c0[g]));
-      _mm512_storeu_si512(w1 + i + 8 * g, _mm512_or_si512(_mm512_slli_epi64(c3[g], 32), c2[g]));
+      __m512i word0, word1;
+      philox_words(c0[g], c1[g], c2[g], c3[g], word0, word1);
+      _mm512_storeu_si512(w0 + i + 8 * g, word0);
+      _mm512_storeu_si512(w1 + i + 8 * g, word1);
     }
   }
 #endif
@@ -270,7 +409,8 @@ void NormalStream::block(std::uint64_t first_pair, double* out) const {
   philox(first_pair, words[0], words[1]);
   alignas(64) double normals[2][kBlockPairs];
   constexpr int kVectors = 2 * kBlockPairs / 8;
-  std::uint16_t rejects[2 * kBlockPairs + 8];
+  static_assert(kVectors <= 8, "ziggurat_fast takes up to 8 vectors at a time");
+  std::uint16_t rejects[2 * kBlockPairs + kRejectsSlack];
   const int count = ziggurat_fast(&words[0][0], 0, kVectors, [&](int v) { return &normals[0][0] + 8 * v; }, rejects);
   slow_normals(rejects, count, [&](int index, Rejected& chunk) {
     const int j = index / kBlockPairs, i = index % kBlockPairs;
@@ -288,24 +428,26 @@ NormalLanes::NormalLanes(std::uint64_t seed, const std::uint64_t (&realizations)
     key0_[l] = stream.key_[0];
     key1_[l] = stream.key_[1];
     seed_high_[l] = stream.seed_high_;
+    for (int round = 0; round < 10; ++round) {  // uint32_t arithmetic: wraps as Philox's does
+      round_keys_[round][0][l] = key0_[l] + static_cast<std::uint32_t>(round) * kPhiloxW0;
+      round_keys_[round][1][l] = key1_[l] + static_cast<std::uint32_t>(round) * kPhiloxW1;
+    }
   }
 }
 
 void NormalLanes::block(std::uint64_t first_pair, double* out, std::ptrdiff_t stride) const {
   // kGroups counters at a time: independent Philox chains side by side.
   constexpr int kGroups = 4;
-  static_assert(kBlockPairs % kGroups == 0);
+  static_assert(kBlockPairs % kGroups == 0 && 2 * kGroups <= 8);  // ziggurat_fast: up to 8 vectors at a time
   // words[i][j][l]: word j of counter first_pair + i of lane l, the main word of the lane's normal
   // k = 2 (first_pair + i) + j, which goes to out[k * stride + l]; vector k of 8 words.
   alignas(64) std::uint64_t words[kBlockPairs][2][kLanes];
-  std::uint16_t rejects[2 * kBlockPairs * kLanes + 8];
+  std::uint16_t rejects[2 * kBlockPairs * kLanes + kRejectsSlack];
   int count = 0;
   const auto normals = [&](int k) { return out + k * stride; };
   for (int i = 0; i < kBlockPairs; i += kGroups) {
 #ifdef __AVX512F__
     // NormalStream::philox with the counter the same in every lane and the keys per lane.
-    const __m512i low = _mm512_set1_epi64(static_cast<long long>(kLow));
-    const __m512i m0 = _mm512_set1_epi64(kPhiloxM0), m1 = _mm512_set1_epi64(kPhiloxM1);
     __m512i c0[kGroups], c1[kGroups], c2[kGroups], c3[kGroups];
     for (int g = 0; g < kGroups; ++g) {
       const std::uint64_t p = first_pair + static_cast<std::uint64_t>(i + g);
@@ -314,27 +456,15 @@ void NormalLanes::block(std::uint64_t first_pair, double* out, std::ptrdiff_t st
       c2[g] = _mm512_cvtepu32_epi64(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(seed_high_)));
       c3[g] = _mm512_setzero_si512();
     }
-    // 32-bit key words in 64-bit lanes; the 32-bit adds wrap as uint32_t does.
-    __m512i key0 = _mm512_cvtepu32_epi64(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(key0_)));
-    __m512i key1 = _mm512_cvtepu32_epi64(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(key1_)));
-    const __m512i w0_step = _mm512_set1_epi64(kPhiloxW0), w1_step = _mm512_set1_epi64(kPhiloxW1);
-    // Only the low 32 bits of each word are the state: vpmuludq reads nothing else, so the high
-    // halves may carry junk through the rounds and are cleared once at the end.
     for (int round = 0; round < 10; ++round) {
-      for (int g = 0; g < kGroups; ++g) {
-        const __m512i p0 = _mm512_mul_epu32(c0[g], m0);
-        const __m512i p1 = _mm512_mul_epu32(c2[g], m1);
-        c0[g] = _mm512_xor_si512(_mm512_xor_si512(_mm512_srli_epi64(p1, 32), c1[g]), key0);
-        c1[g] = p1;
-        c2[g] = _mm512_xor_si512(_mm512_xor_si512(_mm512_srli_epi64(p0, 32), c3[g]), key1);
-        c3[g] = p0;
-      }
-      key0 = _mm512_add_epi32(key0, w0_step);  // the high halves stay 0
-      key1 = _mm512_add_epi32(key1, w1_step);
+      const __m512i key0 = _mm512_load_si512(round_keys_[round][0]), key1 = _mm512_load_si512(round_keys_[round][1]);
+      for (int g = 0; g < kGroups; ++g) philox_round(c0[g], c1[g], c2[g], c3[g], key0, key1);
     }
     for (int g = 0; g < kGroups; ++g) {
-      _mm512_store_si512(words[i + g][0], _mm512_or_si512(_mm512_slli_epi64(c1[g], 32), _mm512_and_si512(c0[g], low)));
-      _mm512_store_si512(words[i + g][1], _mm512_or_si512(_mm512_slli_epi64(c3[g], 32), _mm512_and_si512(c2[g], low)));
+      __m512i w0, w1;
+      philox_words(c0[g], c1[g], c2[g], c3[g], w0, w1);
+      _mm512_store_si512(words[i + g][0], w0);
+      _mm512_store_si512(words[i + g][1], w1);
     }
 #else
     for (int g = 0; g < kGroups; ++g) {

@@ -65,14 +65,55 @@ class ReferenceStream {
   std::uint32_t seed_high_;
 };
 
-// Which way Boost's ziggurat went for a normal that needed more than its main word: the layer
-// (bits 1-7 of the main word) 0 is the base strip, whose rejects go to the tail.
+// Which way Boost's ziggurat went for a normal that needed more than its main word, told apart as
+// normal_stream.cpp's SIMD wedge test tells them apart (it decides every wedge case but a second
+// rejection; Boost's own code takes those and the tail). The layer (bits 1-7 of the main word) 0 is the base
+// strip, whose rejects go to the tail; in layers 1-127 the point y = y_i + y01 (y_{i+1} - y_i), y01
+// from the first retry word, is below both bounds of e^{-x^2/2} (accepted), above both (rejected)
+// or between them, where Boost compares it with exp. A rejected normal's next try has the second
+// retry word as its main word.
 struct SlowPathCount {
   long wedge = 0, tail = 0, second_retry_counter = 0;
-  void add(std::uint64_t main_word, int words) {
+  long below_bounds = 0, between_below_curve = 0, between_above_curve = 0;
+  long rejected_then_first_test = 0, rejected_then_more = 0;
+
+  static bool passes_first_test(std::uint64_t word) {
+    const double* const table_x = boost::random::detail::normal_table<double>::table_x;
+    const int i = static_cast<int>(word >> 1 & 0x7F);
+    return static_cast<double>((word & ~(std::uint64_t{1} << 11)) >> 8) * 0x1p-56 * table_x[i] < table_x[i + 1];
+  }
+
+  void add(const ReferenceStream& reference, std::uint64_t k, int words) {
     if (words == 1) return;
-    ((main_word >> 1 & 0x7F) == 0 ? tail : wedge) += 1;
+    const std::uint64_t main_word = reference.word(k / 2, 0u, static_cast<int>(k % 2));
+    const int i = static_cast<int>(main_word >> 1 & 0x7F);
     second_retry_counter += words > 3;  // beyond the words of retry counter m = 0
+    if (i == 0) {
+      ++tail;
+      return;
+    }
+    ++wedge;
+    const auto retry_counter = static_cast<std::uint32_t>(1 + k % 2);
+    const double* const table_x = boost::random::detail::normal_table<double>::table_x;
+    const double* const table_y = boost::random::detail::normal_table<double>::table_y;
+    const double x = static_cast<double>((main_word & ~(std::uint64_t{1} << 11)) >> 8) * 0x1p-56 * table_x[i];
+    const double y01 = static_cast<double>(reference.word(k / 2, retry_counter, 0)) * 0x1p-64;
+    const double y = table_y[i] + y01 * (table_y[i + 1] - table_y[i]);
+    // y minus the chord from (x_{i+1}, y_{i+1}) to (x_i, y_i), times (x_i - x_{i+1}) / (y_{i+1} - y_i) > 0,
+    // and y minus the tangent at (x_i, y_i): the upper and lower bounds where the curve is convex
+    // (x_i >= 1), the other way round where it is concave.
+    const double chord = (table_x[i] - table_x[i + 1]) * y01 - (table_x[i] - x);
+    const double tangent = y - (table_y[i] + (table_x[i] - x) * table_y[i] * table_x[i]);
+    const bool convex = table_x[i] >= 1;
+    bool rejected = !((convex ? chord : tangent) < 0);
+    if (!rejected && (convex ? tangent : chord) < 0) {
+      ++below_bounds;
+    } else if (!rejected) {
+      rejected = !(y < std::exp(-(x * x / 2)));
+      ++(rejected ? between_above_curve : between_below_curve);
+    }
+    if (rejected)
+      ++(passes_first_test(reference.word(k / 2, retry_counter, 1)) ? rejected_then_first_test : rejected_then_more);
   }
 };
 
@@ -133,7 +174,7 @@ TEST(NormalStream, IsBoostsZigguratOnItsPhiloxWords) {
           const double expected = reference.normal(first + i, &words);
           ASSERT_TRUE(bit_equal(z[i], expected)) << "seed " << seed << ", r " << r << ", normal " << first + i
                                                  << ": " << z[i] << " != " << expected;
-          slow.add(reference.word((first + i) / 2, 0u, static_cast<int>((first + i) % 2)), words);
+          slow.add(reference, first + i, words);
           ++normals;
         }
       }
@@ -145,6 +186,14 @@ TEST(NormalStream, IsBoostsZigguratOnItsPhiloxWords) {
   EXPECT_GT(slow.wedge, normals * 0.0270 / 3);
   EXPECT_GT(slow.tail, normals * 0.00057 / 3);
   EXPECT_GT(slow.second_retry_counter, 100);  // 0.04 % expected (10^7 normals measured, 2026-12-01)
+  // Every branch of the SIMD wedge test and of its fallbacks to Boost: of the wedge cases (10^8
+  // words measured, 2026-12-01) 49.3 % lie below both bounds, 42.1 % above and 8.6 % between (5.5 %
+  // below the curve, 3.1 % above); 1.24 % are rejected twice. At least a third of each.
+  EXPECT_GT(slow.below_bounds, slow.wedge * 0.493 / 3);
+  EXPECT_GT(slow.between_below_curve, slow.wedge * 0.055 / 3);
+  EXPECT_GT(slow.between_above_curve, slow.wedge * 0.031 / 3);
+  EXPECT_GT(slow.rejected_then_first_test, slow.wedge * (0.421 + 0.031 - 0.0124) / 3);
+  EXPECT_GT(slow.rejected_then_more, slow.wedge * 0.0124 / 3);
 }
 
 // Ensemble's lane-major generator: each lane is its own realization's stream bit for bit, whatever
@@ -168,7 +217,7 @@ TEST(NormalLanes, EachLaneIsItsRealizationsStream) {
             ASSERT_TRUE(bit_equal(out[k * kLanes + l], expected[k])) << "lane " << l << ", normal " << k;
             int words = 0;
             ASSERT_TRUE(bit_equal(out[k * kLanes + l], reference.normal(2 * first_pair + k, &words)));
-            slow.add(reference.word(first_pair + k / 2, 0u, k % 2), words);
+            slow.add(reference, 2 * first_pair + k, words);
           }
         }
       }
@@ -177,6 +226,11 @@ TEST(NormalLanes, EachLaneIsItsRealizationsStream) {
   // 1.3e5 normals: about 3500 in a wedge, 75 in the tail.
   EXPECT_GT(slow.wedge, 1000);
   EXPECT_GT(slow.tail, 20);
+  EXPECT_GT(slow.below_bounds, 500);  // about 1700, 190, 110, 1500 and 44 expected
+  EXPECT_GT(slow.between_below_curve, 50);
+  EXPECT_GT(slow.between_above_curve, 30);
+  EXPECT_GT(slow.rejected_then_first_test, 500);
+  EXPECT_GT(slow.rejected_then_more, 10);
 }
 
 TEST(NormalStream, FillEqualsAtFromAnyOffset) {

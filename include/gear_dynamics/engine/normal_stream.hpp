@@ -2,7 +2,8 @@
 // (bit for bit Random123's) keyed by (seed, realization); normal 2p + j is Boost.Random's
 // 128-layer ziggurat (normal_distribution<double>) on word j of counter p, its rare retries on
 // words of that normal's own retry counters. The ziggurat's first test runs in SIMD,
-// kBlockPairs counters at a time; Boost's code does the rest.
+// kBlockPairs counters at a time, and so does Boost's wedge test for the first test's rejects;
+// Boost's code does the rest (the tail, exp between the wedge's bounds, further tries).
 // Normal i of a stream depends only on (seed, realization, i), so a realization has the same path
 // whatever runs beside it, in whatever order, on however many threads.
 #pragma once
@@ -54,6 +55,9 @@ class NormalLanes {
 
  private:
   std::uint32_t key0_[kLanes], key1_[kLanes], seed_high_[kLanes];
+  // Each lane's two key words in each of Philox's 10 rounds (32-bit values in 64-bit slots), so
+  // that the rounds read them instead of adding the key schedule's steps.
+  alignas(64) std::uint64_t round_keys_[10][2][kLanes];
 };
 
 }  // namespace gear_dynamics
