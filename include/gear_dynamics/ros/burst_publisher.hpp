@@ -69,8 +69,8 @@ class BurstPublisher {
   // callbacks: those run on the spinner thread after the link is already in the publication.
   bool stream_links_only() const {
     XmlRpc::XmlRpcValue links;
+    links.setSize(0);  // getInfo appends at links.size(), which throws on a value that is not an array
     publication_->getInfo(links);
-    if (links.getType() != XmlRpc::XmlRpcValue::TypeArray) return true;  // none
     for (int i = 0; i < links.size(); ++i)
       if (static_cast<std::string&>(links[i][3]) != "TCPROS") return false;
     return true;
