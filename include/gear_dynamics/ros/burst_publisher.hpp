@@ -29,6 +29,7 @@
 #include <cstring>
 #include <memory>
 #include <mutex>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -45,6 +46,7 @@ class BurstPublisher {
                            [n](const ros::SingleSubscriberPublisher&) { --*n; });
     topic_ = pub_.getTopic();
     shared_->publication = ros::TopicManager::instance()->lookupPublication(topic_);
+    if (!shared_->publication) throw std::runtime_error("BurstPublisher: no publication for " + topic_);
     std::weak_ptr<Shared> weak = shared_;
     listener_ = ros::PollManager::instance()->addPollThreadListener([weak] {
       if (const auto s = weak.lock()) s->enqueue();
@@ -76,9 +78,14 @@ class BurstPublisher {
     return burst_[held_++];
   }
 
-  // Serializes the held messages, in order, and wakes roscpp's poll thread to send them.
+  // Serializes the held messages, in order, and wakes roscpp's poll thread to send them. Without
+  // subscribers (messages held only for the bag) nothing is serialized, as roscpp's publish() does.
   void flush() {
     if (held_ == 0) return;
+    if (!wanted()) {
+      held_ = 0;
+      return;
+    }
     namespace ser = ros::serialization;
     std::uint32_t bytes = 0;
     for (std::size_t i = 0; i < held_; ++i) bytes += 4 + ser::serializationLength(burst_[i]);
@@ -116,7 +123,6 @@ class BurstPublisher {
         taken.swap(pending);
       }
       for (Burst& b : taken) {
-        if (!publication) continue;
         if (b.messages == 1) {
           publication->enqueueMessage(ros::SerializedMessage(b.buffer, b.bytes));
         } else if (stream_links_only()) {
