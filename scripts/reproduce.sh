@@ -24,6 +24,15 @@ port=$(/usr/bin/python3 -c 'import socket; s = socket.socket(); s.bind(("", 0));
 export ROS_MASTER_URI=http://localhost:$port
 rm -f "$report/report.md"
 start=$(date +%s)
-roslaunch -p "$port" gear_dynamics paper.launch output_dir:="$batch" report_folder:="$report" "$@"
+log=$(mktemp)
+trap 'rm -f "$log"' EXIT
+# roslaunch 1.15 exits 0 when a node fails, and the aggregator reads whatever complete batch the
+# folder holds: the batch node's FATAL (e.g. a folder it refuses) must fail the command itself.
+roslaunch -p "$port" gear_dynamics paper.launch output_dir:="$batch" report_folder:="$report" "$@" 2>&1 | tee "$log"
+if grep -q 'FATAL.*gear_monte_carlo' "$log"; then
+  echo "reproduce: gear_monte_carlo failed (see above); $report holds no report of this run" >&2
+  rm -f "$report/report.md"
+  exit 1
+fi
 [ -f "$report/report.md" ] || { echo "reproduce: no report was written (see the log above)" >&2; exit 1; }
 echo "reproduce: report $report/report.md, figures $report/fig*.png ($(( $(date +%s) - start )) s)"

@@ -51,6 +51,11 @@ std::string refusal(const fs::path& dir, const YAML::Node& config, const BatchSe
     if (!m.IsMap() || !m["format"] || m["format"].as<std::string>() != format)
       return entry.path().string() + " is not a " + format + " manifest";
     if (emit(m["config"]) != emit(config)) return "it holds a batch with a different configuration (" + file + ")";
+    // A manifest without the key predates it: generation 1.
+    const int numbers = m["numbers"] ? m["numbers"].as<int>() : 1;
+    if (numbers != kNumbersGeneration)
+      return "its bags hold numbers of generation " + std::to_string(numbers) + " (" + file + "), this build makes generation " +
+             std::to_string(kNumbersGeneration) + ": the same settings give other results now";
     if (!m["shard_count"] || m["shard_count"].as<int>() != s.shard_count)
       return "it holds the same batch split into " + (m["shard_count"] ? m["shard_count"].as<std::string>() : "?") +
              " shards (" + file + "), not " + std::to_string(s.shard_count);
@@ -190,6 +195,7 @@ void write_manifest(const Study& study, const BatchSettings& settings,
   out << YAML::BeginMap;
   out << YAML::Key << "format" << YAML::Value << manifest_format(study);
   out << YAML::Key << "package_version" << YAML::Value << GEAR_DYNAMICS_VERSION;
+  out << YAML::Key << "numbers" << YAML::Value << kNumbersGeneration;  // engine/ensemble.hpp
   out << YAML::Key << "complete" << YAML::Value << complete;  // every run's bag was written
   out << YAML::Key << "config" << YAML::Value << batch_config_yaml(model, settings);
   out << YAML::Key << "shard_index" << YAML::Value << settings.shard_index;

@@ -220,6 +220,22 @@ TEST(BatchBags, ResumeRedoesOnlyMissingBrokenAndUnfinishedRuns) {
         << e.what();
     EXPECT_NE(std::string(e.what()).find("overwrite:=true"), std::string::npos) << e.what();
   }
+  // A folder written by a build whose numbers differ (a manifest of generation 1 has no `numbers`)
+  // is refused too: resuming it would mix old and new results.
+  const fs::path manifest = dir.path / "manifest.yaml";
+  YAML::Node m = YAML::LoadFile(manifest.string());
+  m.remove("numbers");
+  std::ofstream(manifest) << m;
+  try {
+    gd::prepare_folder(model, s, gd::plan_runs(model, s));
+    ADD_FAILURE() << "a batch of older numbers was not refused";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("numbers of generation 1"), std::string::npos) << e.what();
+  }
+  m["numbers"] = gd::kNumbersGeneration;
+  std::ofstream(manifest) << m;
+  EXPECT_TRUE(gd::prepare_folder(model, s, gd::plan_runs(model, s)).empty());
+
   gd::BatchSettings more = s;
   more.realizations = 5;  // the batch settings are part of its identity too
   EXPECT_THROW(gd::prepare_folder(model, more, gd::plan_runs(model, more)), std::runtime_error);

@@ -18,6 +18,11 @@
 
 namespace gear_dynamics {
 
+// Generation of the engine's numbers: raised whenever a change alters any run's results (1: Box-Muller
+// normals, unfused RK4; 2 (2026-12-01): Boost's ziggurat normals, RK4 with fused multiply-adds). A
+// batch folder records it, so a resume never mixes bags of two generations (doc/batch-folder.md).
+constexpr int kNumbersGeneration = 2;
+
 // What differs between the realizations of a block.
 struct LaneSpec {
   double mu = 0.0;               // friction coefficient [-]
