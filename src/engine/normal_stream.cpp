@@ -58,6 +58,24 @@ inline void philox_words(__m512i c0, __m512i c1, __m512i c2, __m512i c3, __m512i
 }
 #endif
 
+#ifdef __AVX512DQ__
+// Boost's first test on 8 words (layer = bits 1-7, sign = bit 0, r = (u & ~bit 11) >> 8 times 2^-56):
+// the accepted lanes' normals go to out; returns which lanes were accepted.
+inline __mmask8 first_test_8(const std::uint64_t* words, double* out) {
+  const double* const table_x = boost::random::detail::normal_table<double>::table_x;
+  constexpr std::uint64_t kClearBit11 = ~(std::uint64_t{1} << 11);
+  const __m512i u = _mm512_loadu_si512(words);
+  const __m512i layer = _mm512_and_si512(_mm512_srli_epi64(u, 1), _mm512_set1_epi64(0x7F));
+  const __m512i bits = _mm512_srli_epi64(_mm512_and_si512(u, _mm512_set1_epi64(static_cast<long long>(kClearBit11))), 8);
+  const __m512d r = _mm512_mul_pd(_mm512_cvtepu64_pd(bits), _mm512_set1_pd(0x1p-56));
+  const __m512d x = _mm512_mul_pd(r, _mm512_i64gather_pd(layer, table_x, 8));
+  const __mmask8 accepted = _mm512_cmp_pd_mask(x, _mm512_i64gather_pd(layer, table_x + 1, 8), _CMP_LT_OQ);
+  const __mmask8 negative = _mm512_testn_epi64_mask(u, _mm512_set1_epi64(1));
+  _mm512_mask_storeu_pd(out, accepted, _mm512_mask_sub_pd(x, negative, _mm512_setzero_pd(), x));
+  return accepted;
+}
+#endif
+
 // The fast path of Boost.Random's 128-layer ziggurat (normal_distribution.hpp, int_float_pair.hpp),
 // with Boost's own table, on vectors of 8 words: one 64-bit word gives the sign (bit 0), the layer
 // i (bits 1-7) and the uniform r = ((word with bit 11 cleared) >> 8) 2^-56 in [0, 1); x = r x_i is
@@ -71,8 +89,6 @@ inline void philox_words(__m512i c0, __m512i c1, __m512i c2, __m512i c3, __m512i
 constexpr int kRejectsSlack = 32;
 template <class Out>
 int ziggurat_fast(const std::uint64_t* words, int first, int last, Out out, std::uint16_t* rejects) {
-  const double* const table_x = boost::random::detail::normal_table<double>::table_x;
-  constexpr std::uint64_t kClearBit11 = ~(std::uint64_t{1} << 11);
   int count = 0;
 #if defined(__AVX512DQ__) && defined(__AVX512VBMI2__)
   // Each vector's rejected lanes as one byte of a 64-bit mask; their indices packed at the end by
@@ -80,14 +96,7 @@ int ziggurat_fast(const std::uint64_t* words, int first, int last, Out out, std:
   // is microcoded and slow). No branch on data that is random by design.
   std::uint64_t rejected = 0;
   for (int v = first; v < last; ++v) {
-    const __m512i u = _mm512_loadu_si512(words + 8 * v);
-    const __m512i layer = _mm512_and_si512(_mm512_srli_epi64(u, 1), _mm512_set1_epi64(0x7F));
-    const __m512i bits = _mm512_srli_epi64(_mm512_and_si512(u, _mm512_set1_epi64(static_cast<long long>(kClearBit11))), 8);
-    const __m512d r = _mm512_mul_pd(_mm512_cvtepu64_pd(bits), _mm512_set1_pd(0x1p-56));
-    const __m512d x = _mm512_mul_pd(r, _mm512_i64gather_pd(layer, table_x, 8));
-    const __mmask8 accepted = _mm512_cmp_pd_mask(x, _mm512_i64gather_pd(layer, table_x + 1, 8), _CMP_LT_OQ);
-    const __mmask8 negative = _mm512_testn_epi64_mask(u, _mm512_set1_epi64(1));
-    _mm512_mask_storeu_pd(out(v), accepted, _mm512_mask_sub_pd(x, negative, _mm512_setzero_pd(), x));
+    const __mmask8 accepted = first_test_8(words + 8 * v, out(v));
     rejected |= std::uint64_t{static_cast<std::uint8_t>(~accepted)} << (8 * (v - first));
   }
   const __m512i index = _mm512_add_epi16(
@@ -103,14 +112,7 @@ int ziggurat_fast(const std::uint64_t* words, int first, int last, Out out, std:
 #elif defined(__AVX512DQ__)
   const __m512i lane = _mm512_set_epi64(7, 6, 5, 4, 3, 2, 1, 0);
   for (int v = first; v < last; ++v) {
-    const __m512i u = _mm512_loadu_si512(words + 8 * v);
-    const __m512i layer = _mm512_and_si512(_mm512_srli_epi64(u, 1), _mm512_set1_epi64(0x7F));
-    const __m512i bits = _mm512_srli_epi64(_mm512_and_si512(u, _mm512_set1_epi64(static_cast<long long>(kClearBit11))), 8);
-    const __m512d r = _mm512_mul_pd(_mm512_cvtepu64_pd(bits), _mm512_set1_pd(0x1p-56));
-    const __m512d x = _mm512_mul_pd(r, _mm512_i64gather_pd(layer, table_x, 8));
-    const __mmask8 accepted = _mm512_cmp_pd_mask(x, _mm512_i64gather_pd(layer, table_x + 1, 8), _CMP_LT_OQ);
-    const __mmask8 negative = _mm512_testn_epi64_mask(u, _mm512_set1_epi64(1));
-    _mm512_mask_storeu_pd(out(v), accepted, _mm512_mask_sub_pd(x, negative, _mm512_setzero_pd(), x));
+    const __mmask8 accepted = first_test_8(words + 8 * v, out(v));
     // The rejected lanes' indices, packed in a register and stored whole (a compressing store to
     // memory is microcoded and slow): no branch on data that is random by design.
     const __mmask8 rejected = static_cast<__mmask8>(~accepted);
@@ -119,6 +121,8 @@ int ziggurat_fast(const std::uint64_t* words, int first, int last, Out out, std:
     count += __builtin_popcount(rejected);
   }
 #else
+  const double* const table_x = boost::random::detail::normal_table<double>::table_x;
+  constexpr std::uint64_t kClearBit11 = ~(std::uint64_t{1} << 11);
   for (int v = first; v < last; ++v) {
     for (int l = 0; l < 8; ++l) {
       const std::uint64_t u = words[8 * v + l];
