@@ -6,10 +6,9 @@
 //       window and sampling otherwise); the sink copies each window as the node's stepping thread
 //       does, then computes the two Welch PSDs as the node's worker does, timed apart (thread CPU):
 //       ns_per_step counts the stepping thread's share only.
-//   gear_live_bench subscribe TOPIC SECONDS [EXPECT [udp]]
-//       a roscpp subscriber (tcpNoDelay; with `udp`, UDPROS) that counts gear_dynamics/GearState
-//       messages on TOPIC for SECONDS of wall time, or until it has received or missed EXPECT
-//       (0: no limit), and prints the count and the sequence gaps (messages dropped on the way).
+//   gear_live_bench subscribe TOPIC SECONDS
+//       a roscpp subscriber (tcpNoDelay) that counts gear_dynamics/GearState messages on TOPIC for
+//       SECONDS of wall time and prints the count and the sequence gaps (messages roscpp dropped).
 #include <sys/resource.h>
 #include <ctime>
 #include <vector>
@@ -124,9 +123,7 @@ int core(int argc, char** argv) {
 }
 
 int subscribe(int argc, char** argv) {
-  if (argc < 4) { std::fprintf(stderr, "usage: gear_live_bench subscribe TOPIC SECONDS [EXPECT [udp]]\n"); return 2; }
-  const long expect = argc > 4 ? std::atol(argv[4]) : 0;
-  const bool udp = argc > 5 && std::string(argv[5]) == "udp";
+  if (argc < 4) { std::fprintf(stderr, "usage: gear_live_bench subscribe TOPIC SECONDS\n"); return 2; }
   ros::init(argc, argv, "gear_live_bench_subscriber", ros::init_options::AnonymousName);
   ros::NodeHandle nh;
   long count = 0, gaps = 0;
@@ -138,10 +135,9 @@ int subscribe(int argc, char** argv) {
         last_seq = m->header.seq;
         ++count;
       },
-      ros::VoidConstPtr(), udp ? ros::TransportHints().udp() : ros::TransportHints().tcpNoDelay());
+      ros::VoidConstPtr(), ros::TransportHints().tcpNoDelay());
   const ros::WallTime end = ros::WallTime::now() + ros::WallDuration(std::atof(argv[3]));
-  while (ros::ok() && ros::WallTime::now() < end && (expect == 0 || count + gaps < expect))
-    ros::spinOnce(), ros::WallDuration(0.0005).sleep();
+  while (ros::ok() && ros::WallTime::now() < end) ros::spinOnce(), ros::WallDuration(0.0005).sleep();
   std::printf("{\"received\": %ld, \"dropped\": %ld, \"cpu_s\": %.3f}\n", count, gaps, cpu_seconds());
   return 0;
 }
@@ -152,6 +148,6 @@ int main(int argc, char** argv) {
   const std::string mode = argc > 1 ? argv[1] : "";
   if (mode == "core") return core(argc, argv);
   if (mode == "subscribe") return subscribe(argc, argv);
-  std::fprintf(stderr, "usage: gear_live_bench core [--rate HZ] [--t-end T] [--repeat K] | subscribe TOPIC SECONDS [EXPECT [udp]]\n");
+  std::fprintf(stderr, "usage: gear_live_bench core [--rate HZ] [--t-end T] [--repeat K] | subscribe TOPIC SECONDS\n");
   return 2;
 }

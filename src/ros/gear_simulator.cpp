@@ -24,11 +24,10 @@ constexpr uint32_t kQueue = 1000;
 // Gazebo throttles its clock): every sim-time node, this one included, wakes up for each /clock
 // message, and nothing needs it finer than the state stamps, which carry the exact time.
 constexpr auto kClockInterval = std::chrono::milliseconds(5);
-// Messages of one burst go out together (GearSimulator::flush, BurstPublisher): roscpp's poll thread
-// is woken once per burst and sends each topic's burst with one send(), instead of a wake-up (pipe
-// write and read, epoll, futex) and a send() per message. The loop flushes before every wait;
-// without waits (real_time_factor 0, or a slow machine) a burst ends after this many publish
-// instants or this much wall time.
+// Messages of one burst go out together (GearSimulator::flush): roscpp wakes its writer thread for
+// the first and queues the rest while it sends, instead of a wake-up (pipe write, epoll, futex) per
+// message. The loop flushes before every wait; without waits (real_time_factor 0, or a slow
+// machine) a burst ends after this many publish instants or this much wall time.
 constexpr std::size_t kBurst = 64;
 constexpr auto kBurstWall = std::chrono::milliseconds(1);
 
@@ -72,12 +71,12 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
       settings_(load_settings(private_nh, config_.run.time_step)),
       reconfigure_server_(reconfigure_mutex_, private_nh),
       updater_(nh, private_nh) {
-  state_ = BurstPublisher<GearState>(nh_, "state", kQueue);
+  state_ = CountedPublisher::advertise<GearState>(nh_, "state", kQueue);
   if (settings_.publish_scalars) {
-    delta_ = BurstPublisher<std_msgs::Float64>(nh_, "delta", kQueue);
-    delta_dot_ = BurstPublisher<std_msgs::Float64>(nh_, "delta_dot", kQueue);
-    phi_ = BurstPublisher<std_msgs::Float64>(nh_, "phi", kQueue);
-    center_distance_ = BurstPublisher<std_msgs::Float64>(nh_, "center_distance", kQueue);
+    delta_ = CountedPublisher::advertise<std_msgs::Float64>(nh_, "delta", kQueue);
+    delta_dot_ = CountedPublisher::advertise<std_msgs::Float64>(nh_, "delta_dot", kQueue);
+    phi_ = CountedPublisher::advertise<std_msgs::Float64>(nh_, "phi", kQueue);
+    center_distance_ = CountedPublisher::advertise<std_msgs::Float64>(nh_, "center_distance", kQueue);
   }
   if (settings_.publish_clock) clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 10);
   run_info_pub_ = nh_.advertise<RunInfo>("run_info", 1, /*latch=*/true);
@@ -91,6 +90,7 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
 
   const SpectrumSampling spectrum = spectrum_sampling(settings_, config_.run.time_step);
   if (spectrum.enabled()) spectrum_ = std::make_unique<SpectrumPublisher>(nh_, spectrum);
+  held_.reserve(5 * kBurst + 5);
   // Publishes t = 0 and the run info at once.
   sim_.emplace(config_, settings_, static_cast<LiveSink&>(*this));
 
@@ -316,35 +316,36 @@ void GearSimulator::publish(const LiveSample& s) {
   const auto now = std::chrono::steady_clock::now();
   publish_clock(now, s.t, false);
   const bool recording = !record_prefix_.empty();
-  if (held_instants_++ == 0) held_since_ = now;
+  if (held_.empty()) held_since_ = now;
   if (recording || state_.wanted()) {
-    GearState& m = state_.hold();
-    m = make_state(s);
-    record(state_.topic(), m.header.stamp, m);
+    held_.push_back(Held{&state_, make_state(s), {}});
+    const GearState& m = held_.back().state;
+    record(state_.topic, m.header.stamp, m);
   }
   if (settings_.publish_scalars) {
     const ros::Time stamp = sim_stamp(s.t);
-    const auto scalar = [&](BurstPublisher<std_msgs::Float64>& p, double value) {
+    const auto scalar = [&](const CountedPublisher& p, double value) {
       if (!recording && !p.wanted()) return;
-      std_msgs::Float64& m = p.hold();
-      m.data = value;
-      record(p.topic(), stamp, m);
+      held_.push_back(Held{&p, {}, {}});
+      held_.back().scalar.data = value;
+      record(p.topic, stamp, held_.back().scalar);
     };
     scalar(delta_, s.delta);
     scalar(delta_dot_, s.delta_dot);
     scalar(phi_, s.phi);
     scalar(center_distance_, s.center_distance);
   }
-  if (held_instants_ >= kBurst || now - held_since_ >= kBurstWall) flush();
+  if (held_.size() >= kBurst || now - held_since_ >= kBurstWall) flush();
 }
 
 void GearSimulator::flush() {
-  state_.flush();
-  delta_.flush();
-  delta_dot_.flush();
-  phi_.flush();
-  center_distance_.flush();
-  held_instants_ = 0;
+  for (const Held& h : held_) {
+    if (h.pub == &state_)
+      h.pub->pub.publish(h.state);
+    else
+      h.pub->pub.publish(h.scalar);
+  }
+  held_.clear();  // keeps the capacity
 }
 
 void GearSimulator::spectrum(const SpectrumSamples& window) {
