@@ -59,17 +59,27 @@ inline void philox_words(__m512i c0, __m512i c1, __m512i c2, __m512i c3, __m512i
 #endif
 
 #ifdef __AVX512DQ__
-// Boost's first test on 8 words (layer = bits 1-7, sign = bit 0, r = (u & ~bit 11) >> 8 times 2^-56):
-// the accepted lanes' normals go to out; returns which lanes were accepted.
-inline __mmask8 first_test_8(const std::uint64_t* words, double* out) {
+// Boost's first test on 8 words u (layer = bits 1-7, r = (u & ~bit 11) >> 8 times 2^-56): the layer,
+// x = r x_i, and x_i, x_{i+1} of the layer; the test accepts where x < x_{i+1}.
+inline void first_test_values(__m512i u, __m512i& layer, __m512d& x, __m512d& x_i, __m512d& x_next) {
   const double* const table_x = boost::random::detail::normal_table<double>::table_x;
   constexpr std::uint64_t kClearBit11 = ~(std::uint64_t{1} << 11);
-  const __m512i u = _mm512_loadu_si512(words);
-  const __m512i layer = _mm512_and_si512(_mm512_srli_epi64(u, 1), _mm512_set1_epi64(0x7F));
+  layer = _mm512_and_si512(_mm512_srli_epi64(u, 1), _mm512_set1_epi64(0x7F));
   const __m512i bits = _mm512_srli_epi64(_mm512_and_si512(u, _mm512_set1_epi64(static_cast<long long>(kClearBit11))), 8);
   const __m512d r = _mm512_mul_pd(_mm512_cvtepu64_pd(bits), _mm512_set1_pd(0x1p-56));
-  const __m512d x = _mm512_mul_pd(r, _mm512_i64gather_pd(layer, table_x, 8));
-  const __mmask8 accepted = _mm512_cmp_pd_mask(x, _mm512_i64gather_pd(layer, table_x + 1, 8), _CMP_LT_OQ);
+  x_i = _mm512_i64gather_pd(layer, table_x, 8);
+  x_next = _mm512_i64gather_pd(layer, table_x + 1, 8);
+  x = _mm512_mul_pd(r, x_i);
+}
+
+// The first test on 8 words; the accepted lanes' normals (sign = bit 0) go to out. Returns which
+// lanes were accepted.
+inline __mmask8 first_test_8(const std::uint64_t* words, double* out) {
+  const __m512i u = _mm512_loadu_si512(words);
+  __m512i layer;
+  __m512d x, x_i, x_next;
+  first_test_values(u, layer, x, x_i, x_next);
+  const __mmask8 accepted = _mm512_cmp_pd_mask(x, x_next, _CMP_LT_OQ);
   const __mmask8 negative = _mm512_testn_epi64_mask(u, _mm512_set1_epi64(1));
   _mm512_mask_storeu_pd(out, accepted, _mm512_mask_sub_pd(x, negative, _mm512_setzero_pd(), x));
   return accepted;
@@ -272,24 +282,14 @@ inline __m512d exp_near(__m512d a) {
 }
 
 __mmask8 wedge(const Rejected& chunk, int g, double* value) {
-  const double* const table_x = boost::random::detail::normal_table<double>::table_x;
   const double* const table_y = boost::random::detail::normal_table<double>::table_y;
   const __mmask8 filled = static_cast<__mmask8>((1u << std::clamp(chunk.count - 8 * g, 0, 8)) - 1);
-  const __m512i one = _mm512_set1_epi64(1), layer_bits = _mm512_set1_epi64(0x7F);
-  const __m512i clear_bit11 = _mm512_set1_epi64(static_cast<long long>(~(std::uint64_t{1} << 11)));
-  // The first test's x on a word, as in ziggurat_fast; x_i and x_{i+1} of its layer.
-  const auto first_test = [&](__m512i u, __m512i& layer, __m512d& x, __m512d& x_i, __m512d& x_next) {
-    layer = _mm512_and_si512(_mm512_srli_epi64(u, 1), layer_bits);
-    const __m512d r = _mm512_mul_pd(_mm512_cvtepu64_pd(_mm512_srli_epi64(_mm512_and_si512(u, clear_bit11), 8)),
-                                    _mm512_set1_pd(0x1p-56));
-    x_i = _mm512_i64gather_pd(layer, table_x, 8);
-    x_next = _mm512_i64gather_pd(layer, table_x + 1, 8);
-    x = _mm512_mul_pd(r, x_i);
-  };
+  const __m512i one = _mm512_set1_epi64(1);
+
   const __m512i u = _mm512_maskz_loadu_epi64(filled, chunk.word + 8 * g);  // slots past count: zeros
   __m512i layer;
   __m512d x, x_i, x_next;
-  first_test(u, layer, x, x_i, x_next);
+  first_test_values(u, layer, x, x_i, x_next);
   const __mmask8 in_wedge = _mm512_mask_test_epi64_mask(filled, layer, layer);  // layer >= 1
   // uniform_01 on a 64-bit engine: word (rounded to nearest) / 2^64, drawn again if it gives 1.
   const __m512d y01 = _mm512_mul_pd(_mm512_cvtepu64_pd(_mm512_load_si512(chunk.retry0 + 8 * g)), _mm512_set1_pd(0x1p-64));
@@ -320,7 +320,7 @@ __mmask8 wedge(const Rejected& chunk, int g, double* value) {
   const __m512i u2 = _mm512_load_si512(chunk.retry1 + 8 * g);
   __m512i layer2;
   __m512d x2, x2_i, x2_next;
-  first_test(u2, layer2, x2, x2_i, x2_next);
+  first_test_values(u2, layer2, x2, x2_i, x2_next);
   const __mmask8 retried = _mm512_mask_cmp_pd_mask(rejected, x2, x2_next, _CMP_LT_OQ);
   // Boost's (x sign) 1 + 0 as in ziggurat_fast, with the sign of the accepted word.
   const __m512d chosen = _mm512_mask_blend_pd(accepted, x2, x);
