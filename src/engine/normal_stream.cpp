@@ -285,7 +285,6 @@ __mmask8 wedge(const Rejected& chunk, int g, double* value) {
   const double* const table_y = boost::random::detail::normal_table<double>::table_y;
   const __mmask8 filled = static_cast<__mmask8>((1u << std::clamp(chunk.count - 8 * g, 0, 8)) - 1);
   const __m512i one = _mm512_set1_epi64(1);
-
   const __m512i u = _mm512_maskz_loadu_epi64(filled, chunk.word + 8 * g);  // slots past count: zeros
   __m512i layer;
   __m512d x, x_i, x_next;
