@@ -34,27 +34,64 @@ inline void philox_one(std::uint64_t p, std::uint32_t seed_high, std::uint32_t c
   w1 = (c3 << 32) | c2;
 }
 
-#ifdef __AVX512F__
-// Philox4x32-10 on 8 counters side by side (AVX-512), one 32-bit word of the state in the low half
-// of each 64-bit lane. vpmuludq reads only the low halves, so the high halves may carry junk through
-// the rounds; philox_words clears them. A product's high half moves down by swapping the dwords of
-// each lane (vpshufd, a shuffle) rather than by a shift, which would compete with the multiplies for
-// the one port that runs both on 512-bit vectors.
-inline __m512i swap_halves(__m512i x) { return _mm512_shuffle_epi32(x, _MM_PERM_CDAB); }
+// Philox4x32-10 on several counters side by side in a vector of 64-bit lanes (8 with AVX-512, 4
+// with AVX2), one 32-bit word of the state in the low half of each lane. vpmuludq reads only the
+// low halves, so the high halves may carry junk through the rounds; philox_words clears them. A
+// product's high half moves down by swapping the dwords of each lane (vpshufd, a shuffle) rather
+// than by a shift, which would compete with the multiplies for the port that runs both on 512-bit
+// vectors.
+#if defined(__AVX512F__)
+#define GD_PHILOX_SIMD 1
+using Words = __m512i;
+constexpr int kWordsPerVector = 8;
+inline Words words_set1(std::uint64_t x) { return _mm512_set1_epi64(static_cast<long long>(x)); }
+inline Words words_from_u32(const std::uint32_t* x) {  // zero-extended
+  return _mm512_cvtepu32_epi64(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(x)));
+}
+inline Words words_load(const std::uint64_t* x) { return _mm512_loadu_si512(x); }
+inline void words_store(std::uint64_t* x, Words w) { _mm512_storeu_si512(x, w); }
+inline Words words_iota(std::uint64_t first) {  // first, first + 1, ...
+  return _mm512_add_epi64(words_set1(first), _mm512_set_epi64(7, 6, 5, 4, 3, 2, 1, 0));
+}
+inline Words high_to_low(Words x) { return _mm512_srli_epi64(x, 32); }
+inline Words mul_low32(Words a, Words b) { return _mm512_mul_epu32(a, b); }
+inline Words xor3(Words a, Words b, Words c) { return _mm512_xor_si512(_mm512_xor_si512(a, b), c); }
+inline Words swap_halves(Words x) { return _mm512_shuffle_epi32(x, _MM_PERM_CDAB); }
+inline Words low_then_high(Words low, Words high) {  // each lane: high's low dword : low's low dword
+  return _mm512_mask_blend_epi32(0xAAAA, low, swap_halves(high));
+}
+#elif defined(__AVX2__)
+#define GD_PHILOX_SIMD 1
+using Words = __m256i;
+constexpr int kWordsPerVector = 4;
+inline Words words_set1(std::uint64_t x) { return _mm256_set1_epi64x(static_cast<long long>(x)); }
+inline Words words_from_u32(const std::uint32_t* x) {
+  return _mm256_cvtepu32_epi64(_mm_loadu_si128(reinterpret_cast<const __m128i*>(x)));
+}
+inline Words words_load(const std::uint64_t* x) { return _mm256_loadu_si256(reinterpret_cast<const __m256i*>(x)); }
+inline void words_store(std::uint64_t* x, Words w) { _mm256_storeu_si256(reinterpret_cast<__m256i*>(x), w); }
+inline Words words_iota(std::uint64_t first) { return _mm256_add_epi64(words_set1(first), _mm256_set_epi64x(3, 2, 1, 0)); }
+inline Words high_to_low(Words x) { return _mm256_srli_epi64(x, 32); }
+inline Words mul_low32(Words a, Words b) { return _mm256_mul_epu32(a, b); }
+inline Words xor3(Words a, Words b, Words c) { return _mm256_xor_si256(_mm256_xor_si256(a, b), c); }
+inline Words swap_halves(Words x) { return _mm256_shuffle_epi32(x, 0xB1); }
+inline Words low_then_high(Words low, Words high) { return _mm256_blend_epi32(low, swap_halves(high), 0xAA); }
+#endif
 
-inline void philox_round(__m512i& c0, __m512i& c1, __m512i& c2, __m512i& c3, __m512i key0, __m512i key1) {
-  const __m512i p0 = _mm512_mul_epu32(c0, _mm512_set1_epi64(kPhiloxM0));
-  const __m512i p1 = _mm512_mul_epu32(c2, _mm512_set1_epi64(kPhiloxM1));
-  c0 = _mm512_xor_si512(_mm512_xor_si512(swap_halves(p1), c1), key0);
+#ifdef GD_PHILOX_SIMD
+inline void philox_round(Words& c0, Words& c1, Words& c2, Words& c3, Words key0, Words key1) {
+  const Words p0 = mul_low32(c0, words_set1(kPhiloxM0));
+  const Words p1 = mul_low32(c2, words_set1(kPhiloxM1));
+  c0 = xor3(swap_halves(p1), c1, key0);
   c1 = p1;
-  c2 = _mm512_xor_si512(_mm512_xor_si512(swap_halves(p0), c3), key1);
+  c2 = xor3(swap_halves(p0), c3, key1);
   c3 = p0;
 }
 
 // The state's words as the 64-bit outputs w0 = c1:c0 and w1 = c3:c2.
-inline void philox_words(__m512i c0, __m512i c1, __m512i c2, __m512i c3, __m512i& w0, __m512i& w1) {
-  w0 = _mm512_mask_blend_epi32(0xAAAA, c0, swap_halves(c1));
-  w1 = _mm512_mask_blend_epi32(0xAAAA, c2, swap_halves(c3));
+inline void philox_words(Words c0, Words c1, Words c2, Words c3, Words& w0, Words& w1) {
+  w0 = low_then_high(c0, c1);
+  w1 = low_then_high(c2, c3);
 }
 #endif
 
@@ -83,6 +120,50 @@ inline __mmask8 first_test_8(const std::uint64_t* words, double* out) {
   const __mmask8 negative = _mm512_testn_epi64_mask(u, _mm512_set1_epi64(1));
   _mm512_mask_storeu_pd(out, accepted, _mm512_mask_sub_pd(x, negative, _mm512_setzero_pd(), x));
   return accepted;
+}
+#elif defined(__AVX2__)
+// 64-bit integers as the nearest doubles (cvtepu64_pd, which AVX2 lacks, and the plain loop's
+// conversion round so): the high and low 32 bits become exact doubles by the 2^84 and 2^52
+// exponent tricks, and their sum is rounded once.
+inline __m256d to_double(__m256i n) {
+  const __m256d high = _mm256_sub_pd(
+      _mm256_castsi256_pd(_mm256_or_si256(_mm256_srli_epi64(n, 32), _mm256_set1_epi64x(0x4530000000000000))),
+      _mm256_set1_pd(0x1p84 + 0x1p52));
+  return _mm256_add_pd(high, _mm256_castsi256_pd(_mm256_blend_epi32(n, _mm256_set1_epi64x(0x4330000000000000), 0xAA)));
+}
+
+// Boost's first test on 4 words (as the AVX-512 first_test_values): x = r x_i and x_i, x_{i+1} of
+// each word's layer, read as one 16-byte load per lane (gathers are slower here) and transposed.
+struct FirstTest4 {
+  __m256d x, x_i, x_next;
+};
+inline FirstTest4 first_test_values(const std::uint64_t* words) {
+  const double* const table_x = boost::random::detail::normal_table<double>::table_x;
+  constexpr std::uint64_t kClearBit11 = ~(std::uint64_t{1} << 11);
+  const __m256i u = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(words));
+  const __m256i bits = _mm256_srli_epi64(_mm256_and_si256(u, _mm256_set1_epi64x(static_cast<long long>(kClearBit11))), 8);
+  const __m256d r = _mm256_mul_pd(to_double(bits), _mm256_set1_pd(0x1p-56));
+  const auto pair = [&](int k) { return _mm_loadu_pd(table_x + (words[k] >> 1 & 0x7F)); };
+  const __m256d a = _mm256_insertf128_pd(_mm256_castpd128_pd256(pair(0)), pair(2), 1);
+  const __m256d b = _mm256_insertf128_pd(_mm256_castpd128_pd256(pair(1)), pair(3), 1);
+  const __m256d x_i = _mm256_unpacklo_pd(a, b);
+  return {_mm256_mul_pd(r, x_i), x_i, _mm256_unpackhi_pd(a, b)};
+}
+
+// Boost's value for each lane: x where bit 0 of the word is set, else 0 - x.
+inline __m256d signed_normal(const std::uint64_t* words, __m256d x) {
+  const __m256i u = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(words));
+  const __m256i one = _mm256_set1_epi64x(1);
+  const __m256d positive = _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_and_si256(u, one), one));
+  return _mm256_blendv_pd(_mm256_sub_pd(_mm256_setzero_pd(), x), x, positive);
+}
+
+// ziggurat_fast's first test (below) on 4 words: every lane's candidate goes to out, the rejected
+// ones to be overwritten by the slow path. Returns which lanes were accepted (bits 0-3).
+inline int first_test_4(const std::uint64_t* words, double* out) {
+  const FirstTest4 f = first_test_values(words);
+  _mm256_storeu_pd(out, signed_normal(words, f.x));
+  return _mm256_movemask_pd(_mm256_cmp_pd(f.x, f.x_next, _CMP_LT_OQ));
 }
 #endif
 
@@ -129,6 +210,12 @@ int ziggurat_fast(const std::uint64_t* words, int first, int last, Out out, std:
     const __m512i index = _mm512_maskz_compress_epi64(rejected, _mm512_add_epi64(_mm512_set1_epi64(8 * v), lane));
     _mm_storeu_si128(reinterpret_cast<__m128i*>(rejects + count), _mm512_cvtepi64_epi16(index));
     count += __builtin_popcount(rejected);
+  }
+#elif defined(__AVX2__)
+  for (int v = first; v < last; ++v) {
+    const int accepted = first_test_4(words + 8 * v, out(v)) | first_test_4(words + 8 * v + 4, out(v) + 4) << 4;
+    for (unsigned rejected = ~accepted & 0xFFu; rejected != 0; rejected &= rejected - 1)
+      rejects[count++] = static_cast<std::uint16_t>(8 * v + __builtin_ctz(rejected));
   }
 #else
   const double* const table_x = boost::random::detail::normal_table<double>::table_x;
@@ -328,24 +415,92 @@ __mmask8 wedge(const Rejected& chunk, int g, double* value) {
   _mm512_storeu_pd(value + 8 * g, _mm512_mask_sub_pd(chosen, negative, _mm512_setzero_pd(), chosen));
   return accepted | retried;
 }
+#elif defined(__AVX2__) && defined(__FMA__)
+#define GD_SIMD_WEDGE 1
+// exp_near and wedge above on 4 lanes, for AVX2 (the same operations; 2^k built in the exponent
+// field, k in [-12, 0], where AVX-512 has scalef).
+inline __m256d exp_near(__m256d a) {
+  const __m256d k = _mm256_round_pd(_mm256_mul_pd(a, _mm256_set1_pd(1.4426950408889634)), _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC);
+  const __m256d r = _mm256_fnmadd_pd(k, _mm256_set1_pd(1.90821492927058770002e-10),
+                                     _mm256_fnmadd_pd(k, _mm256_set1_pd(6.93147180369123816490e-01), a));
+  struct InverseFactorials {
+    double value[14];
+    constexpr InverseFactorials() : value{1.0} {
+      for (int n = 1; n < 14; ++n) value[n] = value[n - 1] / n;
+    }
+  };
+  static constexpr InverseFactorials kTaylor;
+  __m256d p = _mm256_set1_pd(kTaylor.value[13]);
+  for (int n = 12; n >= 0; --n) p = _mm256_fmadd_pd(p, r, _mm256_set1_pd(kTaylor.value[n]));
+  const __m256i exponent = _mm256_slli_epi64(_mm256_add_epi64(_mm256_cvtepi32_epi64(_mm256_cvtpd_epi32(k)), _mm256_set1_epi64x(1023)), 52);
+  return _mm256_mul_pd(p, _mm256_castsi256_pd(exponent));
+}
+
+// Slots 4 g ... 4 g + 3 of the chunk (which is zero past its count); returns the decided lanes.
+int wedge(const Rejected& chunk, int g, double* value) {
+  const double* const table_y = boost::random::detail::normal_table<double>::table_y;
+  const __m256d zero = _mm256_setzero_pd(), one = _mm256_set1_pd(1.0);
+  const __m256d filled = _mm256_castsi256_pd(
+      _mm256_cmpgt_epi64(_mm256_set1_epi64x(chunk.count - 4 * g), _mm256_set_epi64x(3, 2, 1, 0)));
+  const std::uint64_t* const words = chunk.word + 4 * g;
+  const FirstTest4 f = first_test_values(words);
+  const __m256d x = f.x, x_i = f.x_i, x_next = f.x_next;
+  const __m256i layer = _mm256_and_si256(_mm256_srli_epi64(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(words)), 1),
+                                         _mm256_set1_epi64x(0x7F));
+  const __m256d in_wedge = _mm256_andnot_pd(_mm256_castsi256_pd(_mm256_cmpeq_epi64(layer, _mm256_setzero_si256())), filled);
+  const __m256d y01 = _mm256_mul_pd(to_double(_mm256_load_si256(reinterpret_cast<const __m256i*>(chunk.retry0 + 4 * g))),
+                                    _mm256_set1_pd(0x1p-64));
+  const __m256d uniform = _mm256_and_pd(in_wedge, _mm256_cmp_pd(y01, one, _CMP_LT_OQ));
+  const auto pair = [&](int k) { return _mm_loadu_pd(table_y + (words[k] >> 1 & 0x7F)); };
+  const __m256d a = _mm256_insertf128_pd(_mm256_castpd128_pd256(pair(0)), pair(2), 1);
+  const __m256d b = _mm256_insertf128_pd(_mm256_castpd128_pd256(pair(1)), pair(3), 1);
+  const __m256d y_i = _mm256_unpacklo_pd(a, b), y_next = _mm256_unpackhi_pd(a, b);
+  const __m256d y = _mm256_add_pd(y_i, _mm256_mul_pd(y01, _mm256_sub_pd(y_next, y_i)));
+  const __m256d x_i_minus_x = _mm256_sub_pd(x_i, x);
+  const __m256d chord = _mm256_sub_pd(_mm256_mul_pd(_mm256_sub_pd(x_i, x_next), y01), x_i_minus_x);
+  const __m256d tangent = _mm256_sub_pd(y, _mm256_add_pd(y_i, _mm256_mul_pd(_mm256_mul_pd(x_i_minus_x, y_i), x_i)));
+  const __m256d convex = _mm256_cmp_pd(x_i, one, _CMP_GE_OQ);
+  const __m256d above_ubound = _mm256_blendv_pd(tangent, chord, convex);
+  const __m256d above_lbound = _mm256_blendv_pd(chord, tangent, convex);
+  const __m256d below_ubound = _mm256_and_pd(uniform, _mm256_cmp_pd(above_ubound, zero, _CMP_LT_OQ));
+  const __m256d below_lbound = _mm256_and_pd(below_ubound, _mm256_cmp_pd(above_lbound, zero, _CMP_LT_OQ));
+  const __m256d between = _mm256_andnot_pd(below_lbound, below_ubound);
+  const __m256d curve = exp_near(_mm256_sub_pd(zero, _mm256_div_pd(_mm256_mul_pd(x, x), _mm256_set1_pd(2.0))));
+  const __m256d below_curve = _mm256_and_pd(between, _mm256_cmp_pd(y, _mm256_mul_pd(curve, _mm256_set1_pd(1 - 1e-12)), _CMP_LT_OQ));
+  const __m256d above_curve = _mm256_and_pd(between, _mm256_cmp_pd(y, _mm256_mul_pd(curve, _mm256_set1_pd(1 + 1e-12)), _CMP_GT_OQ));
+  const __m256d accepted = _mm256_or_pd(below_lbound, below_curve);
+  const __m256d rejected = _mm256_or_pd(_mm256_andnot_pd(below_ubound, uniform), above_curve);
+  // Boost's next try: w1 is its main word.
+  const std::uint64_t* const words2 = chunk.retry1 + 4 * g;
+  const FirstTest4 f2 = first_test_values(words2);
+  const __m256d retried = _mm256_and_pd(rejected, _mm256_cmp_pd(f2.x, f2.x_next, _CMP_LT_OQ));
+  _mm256_storeu_pd(value + 4 * g, _mm256_blendv_pd(signed_normal(words2, f2.x), signed_normal(words, x), accepted));
+  return _mm256_movemask_pd(_mm256_or_pd(accepted, retried));
+}
 #endif
 
 // The slow path for the rejects of ziggurat_fast (add(index, chunk) puts each into a chunk),
 // kChunk at a time so that their first retry words come from one SIMD Philox: Boost's wedge test
-// in SIMD (wedge() above) where AVX-512 is there, and Boost.Random's normal_distribution<double>(0, 1)
+// in SIMD (wedge() above) with AVX-512 or AVX2 and FMA, and Boost.Random's normal_distribution<double>(0, 1)
 // in full on the engine of each normal it does not decide (it repeats the first test on the main
 // word and goes on to the wedge or the tail).
 template <class Add>
 void slow_normals(const std::uint16_t* rejects, int count, Add add) {
   for (int start = 0; start < count; start += Rejected::kChunk) {
-    Rejected chunk;
+    Rejected chunk{};  // zeros past its count, where the SIMD wedge reads whole vectors
     for (int n = start; n < std::min(count, start + Rejected::kChunk); ++n) add(rejects[n], chunk);
     chunk.first_retry_words();
     std::uint32_t undecided = (1u << chunk.count) - 1;
-#ifdef __AVX512DQ__
+#if defined(__AVX512DQ__)
     double value[Rejected::kChunk];
     std::uint32_t decided = wedge(chunk, 0, value);
     if (chunk.count > 8) decided |= std::uint32_t{wedge(chunk, 1, value)} << 8;
+#elif defined(GD_SIMD_WEDGE)
+    double value[Rejected::kChunk];
+    std::uint32_t decided = 0;
+    for (int g = 0; 4 * g < chunk.count; ++g) decided |= static_cast<std::uint32_t>(wedge(chunk, g, value)) << (4 * g);
+#endif
+#if defined(__AVX512DQ__) || defined(GD_SIMD_WEDGE)
     for (int i = 0; i < chunk.count; ++i) *chunk.out[i] = value[i];  // the undecided are overwritten below
     undecided &= ~decided;
 #endif
@@ -370,35 +525,33 @@ NormalStream::NormalStream(std::uint64_t seed, std::uint64_t realization)
 void NormalStream::philox(std::uint64_t first_pair, std::uint64_t* w0, std::uint64_t* w1) const {
   // Philox4x32-10 on the counters (p, p >> 32, seed_high, 0) for kBlockPairs consecutive p, run
   // side by side. Random123's implementation works one counter at a time and compilers turn its
-  // 32 x 32 -> 64 bit products into slow 64-bit vector multiplies, hence the AVX-512 path;
-  // both paths are integer arithmetic, so they agree bit for bit (test_random checks both
+  // 32 x 32 -> 64 bit products into slow 64-bit vector multiplies, hence the SIMD path (AVX-512 or
+  // AVX2); both paths are integer arithmetic, so they agree bit for bit (test_random checks both
   // against r123::Philox4x32).
   int i = 0;
-#ifdef __AVX512F__
-  // kGroups vectors of 8 counters advance together: the rounds are a latency chain, and
+#ifdef GD_PHILOX_SIMD
+  // kGroups vectors of counters advance together: the rounds are a latency chain, and
   // independent chains side by side keep the multipliers busy.
-  constexpr int kGroups = 4;
-  const __m512i lane = _mm512_set_epi64(7, 6, 5, 4, 3, 2, 1, 0);
-  for (; i + 8 * kGroups <= kBlockPairs; i += 8 * kGroups) {
-    __m512i c0[kGroups], c1[kGroups], c2[kGroups], c3[kGroups];
+  constexpr int kGroups = 4, kWidth = kWordsPerVector;
+  for (; i + kWidth * kGroups <= kBlockPairs; i += kWidth * kGroups) {
+    Words c0[kGroups], c1[kGroups], c2[kGroups], c3[kGroups];
     for (int g = 0; g < kGroups; ++g) {
-      c0[g] = _mm512_add_epi64(_mm512_set1_epi64(static_cast<long long>(first_pair + i + 8 * g)), lane);
-      c1[g] = _mm512_srli_epi64(c0[g], 32);
-      c2[g] = _mm512_set1_epi64(seed_high_);
-      c3[g] = _mm512_setzero_si512();
+      c0[g] = words_iota(first_pair + static_cast<std::uint64_t>(i + kWidth * g));
+      c1[g] = high_to_low(c0[g]);
+      c2[g] = words_set1(seed_high_);
+      c3[g] = words_set1(0);
     }
     std::uint32_t k0 = key_[0], k1 = key_[1];
     for (int round = 0; round < 10; ++round) {
-      for (int g = 0; g < kGroups; ++g)
-        philox_round(c0[g], c1[g], c2[g], c3[g], _mm512_set1_epi64(k0), _mm512_set1_epi64(k1));
+      for (int g = 0; g < kGroups; ++g) philox_round(c0[g], c1[g], c2[g], c3[g], words_set1(k0), words_set1(k1));
       k0 += kPhiloxW0;
       k1 += kPhiloxW1;
     }
     for (int g = 0; g < kGroups; ++g) {
-      __m512i word0, word1;
+      Words word0, word1;
       philox_words(c0[g], c1[g], c2[g], c3[g], word0, word1);
-      _mm512_storeu_si512(w0 + i + 8 * g, word0);
-      _mm512_storeu_si512(w1 + i + 8 * g, word1);
+      words_store(w0 + i + kWidth * g, word0);
+      words_store(w1 + i + kWidth * g, word1);
     }
   }
 #endif
@@ -439,8 +592,13 @@ NormalLanes::NormalLanes(std::uint64_t seed, const std::uint64_t (&realizations)
 }
 
 void NormalLanes::block(std::uint64_t first_pair, double* out, std::ptrdiff_t stride) const {
-  // kGroups counters at a time: independent Philox chains side by side.
+  // kGroups counters at a time, each in kLanes / kWordsPerVector vectors: four independent Philox
+  // chains side by side.
+#ifdef GD_PHILOX_SIMD
+  constexpr int kVectors = kLanes / kWordsPerVector, kGroups = 4 / kVectors;
+#else
   constexpr int kGroups = 4;
+#endif
   static_assert(kBlockPairs % kGroups == 0 && 2 * kGroups <= 8);  // ziggurat_fast: up to 8 vectors at a time
   // words[i][j][l]: word j of counter first_pair + i of lane l, the main word of the lane's normal
   // k = 2 (first_pair + i) + j, which goes to out[k * stride + l]; vector k of 8 words.
@@ -449,25 +607,32 @@ void NormalLanes::block(std::uint64_t first_pair, double* out, std::ptrdiff_t st
   int count = 0;
   const auto normals = [&](int k) { return out + k * stride; };
   for (int i = 0; i < kBlockPairs; i += kGroups) {
-#ifdef __AVX512F__
+#ifdef GD_PHILOX_SIMD
     // NormalStream::philox with the counter the same in every lane and the keys per lane.
-    __m512i c0[kGroups], c1[kGroups], c2[kGroups], c3[kGroups];
+    Words c0[kGroups][kVectors], c1[kGroups][kVectors], c2[kGroups][kVectors], c3[kGroups][kVectors];
     for (int g = 0; g < kGroups; ++g) {
       const std::uint64_t p = first_pair + static_cast<std::uint64_t>(i + g);
-      c0[g] = _mm512_set1_epi64(static_cast<long long>(p & kLow));
-      c1[g] = _mm512_set1_epi64(static_cast<long long>(p >> 32));
-      c2[g] = _mm512_cvtepu32_epi64(_mm256_loadu_si256(reinterpret_cast<const __m256i*>(seed_high_)));
-      c3[g] = _mm512_setzero_si512();
+      for (int v = 0; v < kVectors; ++v) {
+        c0[g][v] = words_set1(p & kLow);
+        c1[g][v] = words_set1(p >> 32);
+        c2[g][v] = words_from_u32(seed_high_ + kWordsPerVector * v);
+        c3[g][v] = words_set1(0);
+      }
     }
     for (int round = 0; round < 10; ++round) {
-      const __m512i key0 = _mm512_load_si512(round_keys_[round][0]), key1 = _mm512_load_si512(round_keys_[round][1]);
-      for (int g = 0; g < kGroups; ++g) philox_round(c0[g], c1[g], c2[g], c3[g], key0, key1);
+      for (int v = 0; v < kVectors; ++v) {
+        const Words key0 = words_load(round_keys_[round][0] + kWordsPerVector * v);
+        const Words key1 = words_load(round_keys_[round][1] + kWordsPerVector * v);
+        for (int g = 0; g < kGroups; ++g) philox_round(c0[g][v], c1[g][v], c2[g][v], c3[g][v], key0, key1);
+      }
     }
     for (int g = 0; g < kGroups; ++g) {
-      __m512i w0, w1;
-      philox_words(c0[g], c1[g], c2[g], c3[g], w0, w1);
-      _mm512_store_si512(words[i + g][0], w0);
-      _mm512_store_si512(words[i + g][1], w1);
+      for (int v = 0; v < kVectors; ++v) {
+        Words w0, w1;
+        philox_words(c0[g][v], c1[g][v], c2[g][v], c3[g][v], w0, w1);
+        words_store(words[i + g][0] + kWordsPerVector * v, w0);
+        words_store(words[i + g][1] + kWordsPerVector * v, w1);
+      }
     }
 #else
     for (int g = 0; g < kGroups; ++g) {

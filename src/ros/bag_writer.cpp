@@ -130,8 +130,10 @@ std::uint8_t* BagWriter::begin_message(const std::string& topic, const ros::Time
     c.id = static_cast<std::uint32_t>(connections_.size());
     c.topic = topic;
     c.header = Fields().text("type", type).text("md5sum", md5).text("message_definition", definition).bytes();
+    c.message_header = Fields().binary("op", kOpMessageData).binary("conn", c.id).time("time", ros::Time()).bytes();
     found = connections_.emplace(topic, std::move(c)).first;
     by_id_.push_back(&found->second);
+    index_.emplace_back();
   }
   const Connection& c = found->second;
   if (chunk_.empty()) {  // a new chunk starts at the end of the file
@@ -144,8 +146,10 @@ std::uint8_t* BagWriter::begin_message(const std::string& topic, const ros::Time
     chunk_.insert(chunk_.end(), c.header.begin(), c.header.end());
   }
   index_[c.id].push_back({time, static_cast<std::uint32_t>(chunk_.size())});
-  ++current_.counts[c.id];
-  Fields().binary("op", kOpMessageData).binary("conn", c.id).time("time", time).append(chunk_);
+  chunk_.insert(chunk_.end(), c.message_header.begin(), c.message_header.end());
+  // Fields sort by name, so "time" is the last field: its 8 bytes end the header.
+  std::memcpy(chunk_.data() + chunk_.size() - 8, &time.sec, 4);
+  std::memcpy(chunk_.data() + chunk_.size() - 4, &time.nsec, 4);
   append_u32(chunk_, size);
   if (time > current_.end) current_.end = time;
   else if (time < current_.start) current_.start = time;
@@ -178,7 +182,10 @@ void BagWriter::write_chunk() {
   // ... then its index: per connection, the messages' times and offsets in the chunk, time-ordered
   // (rosbag keeps a multiset, equal times in insertion order).
   std::string index;
-  for (auto& [id, entries] : index_) {
+  for (std::uint32_t id = 0; id < index_.size(); ++id) {
+    std::vector<IndexEntry>& entries = index_[id];
+    if (entries.empty()) continue;  // no message of this connection in the chunk
+    current_.counts[id] = static_cast<std::uint32_t>(entries.size());
     std::stable_sort(entries.begin(), entries.end(), [](const IndexEntry& a, const IndexEntry& b) { return a.time < b.time; });
     Fields()
         .binary("op", kOpIndexData)
@@ -196,7 +203,7 @@ void BagWriter::write_chunk() {
   put(index.data(), index.size());
   chunks_.push_back(current_);
   chunk_.clear();
-  index_.clear();
+  for (std::vector<IndexEntry>& entries : index_) entries.clear();
 }
 
 void BagWriter::close() {

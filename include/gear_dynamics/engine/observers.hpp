@@ -86,6 +86,16 @@ class SteadyStateTime {
       _mm512_storeu_pd(last, _mm512_mask_blend_pd(far, _mm512_loadu_pd(last), _mm512_set1_pd(t)));
       return;
     }
+#elif defined(__AVX__)
+    if constexpr (N % 4 == 0) {  // the same with 4 lanes per vector
+      const __m256d sign = _mm256_set1_pd(-0.0);
+      for (int i = 0; i < N; i += 4) {
+        const __m256d off = _mm256_andnot_pd(sign, _mm256_sub_pd(_mm256_loadu_pd(delta.data() + i), _mm256_set1_pd(backlash_)));
+        const __m256d far = _mm256_cmp_pd(off, _mm256_set1_pd(tolerance_), _CMP_GT_OQ);
+        _mm256_storeu_pd(last + i, _mm256_blendv_pd(_mm256_loadu_pd(last + i), _mm256_set1_pd(t), far));
+      }
+      return;
+    }
 #endif
     for (int i = 0; i < N; ++i) last[i] = std::fabs(delta[i] - backlash_) > tolerance_ ? t : last[i];
   }

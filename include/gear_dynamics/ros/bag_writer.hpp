@@ -57,6 +57,9 @@ class BagWriter {
   struct Connection {
     std::uint32_t id = 0;
     std::string topic, header;  // header: the connection header fields as rosbag stores them
+    // The header of this connection's message records, its time field last (patched per message):
+    // built once, so that a message costs a copy, not a map of fields.
+    std::string message_header;
   };
   struct IndexEntry {
     ros::Time time;
@@ -65,7 +68,7 @@ class BagWriter {
   struct ChunkInfo {
     std::uint64_t position = 0;
     ros::Time start, end;
-    std::map<std::uint32_t, std::uint32_t> counts;  // messages per connection
+    std::map<std::uint32_t, std::uint32_t> counts;  // messages per connection (set when the chunk is written)
   };
 
   std::uint8_t* begin_message(const std::string& topic, const ros::Time& time, const char* type, const char* md5,
@@ -84,7 +87,7 @@ class BagWriter {
   std::vector<std::uint8_t> chunk_;  // the open chunk, uncompressed
   std::vector<char> compressed_;
   ChunkInfo current_;
-  std::map<std::uint32_t, std::vector<IndexEntry>> index_;  // the open chunk's, per connection
+  std::vector<std::vector<IndexEntry>> index_;  // the open chunk's, per connection id
   std::vector<ChunkInfo> chunks_;
 };
 
