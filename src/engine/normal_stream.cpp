@@ -122,9 +122,9 @@ inline __mmask8 first_test_8(const std::uint64_t* words, double* out) {
   return accepted;
 }
 #elif defined(__AVX2__)
-// 64-bit integers as the nearest doubles (cvtepu64_pd, which AVX2 lacks, and the plain loop's
-// conversion round so): the high and low 32 bits become exact doubles by the 2^84 and 2^52
-// exponent tricks, and their sum is rounded once.
+// 64-bit integers to the nearest doubles, as AVX-512's cvtepu64_pd and the plain loop's cast round
+// them: the high and low 32 bits become exact doubles by the 2^84 and 2^52 exponent tricks, and
+// their sum is rounded once.
 inline __m256d to_double(__m256i n) {
   const __m256d high = _mm256_sub_pd(
       _mm256_castsi256_pd(_mm256_or_si256(_mm256_srli_epi64(n, 32), _mm256_set1_epi64x(0x4530000000000000))),
@@ -132,8 +132,17 @@ inline __m256d to_double(__m256i n) {
   return _mm256_add_pd(high, _mm256_castsi256_pd(_mm256_blend_epi32(n, _mm256_set1_epi64x(0x4330000000000000), 0xAA)));
 }
 
-// Boost's first test on 4 words (as the AVX-512 first_test_values): x = r x_i and x_i, x_{i+1} of
-// each word's layer, read as one 16-byte load per lane (gathers are slower here) and transposed.
+// table[i] and table[i + 1] for the layer i (bits 1-7) of each of 4 words, as one 16-byte load
+// per lane, transposed (gathers were slower on the Zen 3 measured).
+inline void table_pairs(const double* table, const std::uint64_t* words, __m256d& at_layer, __m256d& next) {
+  const auto pair = [&](int k) { return _mm_loadu_pd(table + (words[k] >> 1 & 0x7F)); };
+  const __m256d a = _mm256_insertf128_pd(_mm256_castpd128_pd256(pair(0)), pair(2), 1);
+  const __m256d b = _mm256_insertf128_pd(_mm256_castpd128_pd256(pair(1)), pair(3), 1);
+  at_layer = _mm256_unpacklo_pd(a, b);
+  next = _mm256_unpackhi_pd(a, b);
+}
+
+// Boost's first test on 4 words (as the AVX-512 first_test_values): x = r x_i, x_i and x_{i+1}.
 struct FirstTest4 {
   __m256d x, x_i, x_next;
 };
@@ -143,11 +152,10 @@ inline FirstTest4 first_test_values(const std::uint64_t* words) {
   const __m256i u = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(words));
   const __m256i bits = _mm256_srli_epi64(_mm256_and_si256(u, _mm256_set1_epi64x(static_cast<long long>(kClearBit11))), 8);
   const __m256d r = _mm256_mul_pd(to_double(bits), _mm256_set1_pd(0x1p-56));
-  const auto pair = [&](int k) { return _mm_loadu_pd(table_x + (words[k] >> 1 & 0x7F)); };
-  const __m256d a = _mm256_insertf128_pd(_mm256_castpd128_pd256(pair(0)), pair(2), 1);
-  const __m256d b = _mm256_insertf128_pd(_mm256_castpd128_pd256(pair(1)), pair(3), 1);
-  const __m256d x_i = _mm256_unpacklo_pd(a, b);
-  return {_mm256_mul_pd(r, x_i), x_i, _mm256_unpackhi_pd(a, b)};
+  FirstTest4 f;
+  table_pairs(table_x, words, f.x_i, f.x_next);
+  f.x = _mm256_mul_pd(r, f.x_i);
+  return f;
 }
 
 // Boost's value for each lane: x where bit 0 of the word is set, else 0 - x.
@@ -451,10 +459,8 @@ int wedge(const Rejected& chunk, int g, double* value) {
   const __m256d y01 = _mm256_mul_pd(to_double(_mm256_load_si256(reinterpret_cast<const __m256i*>(chunk.retry0 + 4 * g))),
                                     _mm256_set1_pd(0x1p-64));
   const __m256d uniform = _mm256_and_pd(in_wedge, _mm256_cmp_pd(y01, one, _CMP_LT_OQ));
-  const auto pair = [&](int k) { return _mm_loadu_pd(table_y + (words[k] >> 1 & 0x7F)); };
-  const __m256d a = _mm256_insertf128_pd(_mm256_castpd128_pd256(pair(0)), pair(2), 1);
-  const __m256d b = _mm256_insertf128_pd(_mm256_castpd128_pd256(pair(1)), pair(3), 1);
-  const __m256d y_i = _mm256_unpacklo_pd(a, b), y_next = _mm256_unpackhi_pd(a, b);
+  __m256d y_i, y_next;
+  table_pairs(table_y, words, y_i, y_next);
   const __m256d y = _mm256_add_pd(y_i, _mm256_mul_pd(y01, _mm256_sub_pd(y_next, y_i)));
   const __m256d x_i_minus_x = _mm256_sub_pd(x_i, x);
   const __m256d chord = _mm256_sub_pd(_mm256_mul_pd(_mm256_sub_pd(x_i, x_next), y01), x_i_minus_x);
