@@ -15,6 +15,16 @@ constexpr std::uint32_t kPhiloxM0 = 0xD2511F53u, kPhiloxM1 = 0xCD9E8D57u;
 constexpr std::uint32_t kPhiloxW0 = 0x9E3779B9u, kPhiloxW1 = 0xBB67AE85u;
 constexpr std::uint64_t kLow = 0xFFFFFFFFull;  // a 32-bit word held in 64 bits
 
+// 1/n! for n = 0 ... 13: the Taylor coefficients of the wedge tests' exp_near.
+struct InverseFactorials {
+  double value[14];
+  constexpr InverseFactorials() : value{1.0} {
+    for (int n = 1; n < 14; ++n) value[n] = value[n - 1] / n;
+  }
+  constexpr double operator[](int n) const { return value[n]; }
+};
+[[maybe_unused]] constexpr InverseFactorials kTaylor;
+
 // Philox4x32-10 of one counter (p, p >> 32, seed_high, c3) with key (k0, k1), as the words
 // w0 = out[1]:out[0] and w1 = out[3]:out[2]: the reference the SIMD paths must equal (c3 = 0), and
 // the retry words of the ziggurat's slow path (c3 > 0).
@@ -364,15 +374,8 @@ inline __m512d exp_near(__m512d a) {
   const __m512d k = _mm512_roundscale_pd(_mm512_mul_pd(a, _mm512_set1_pd(1.4426950408889634)), _MM_FROUND_TO_NEAREST_INT);
   const __m512d r = _mm512_fnmadd_pd(k, _mm512_set1_pd(1.90821492927058770002e-10),  // ln 2 - ln2_hi
                                      _mm512_fnmadd_pd(k, _mm512_set1_pd(6.93147180369123816490e-01), a));  // ln2_hi: k ln2_hi is exact
-  struct InverseFactorials {
-    double value[14];
-    constexpr InverseFactorials() : value{1.0} {
-      for (int n = 1; n < 14; ++n) value[n] = value[n - 1] / n;
-    }
-  };
-  static constexpr InverseFactorials kTaylor;
-  __m512d p = _mm512_set1_pd(kTaylor.value[13]);
-  for (int n = 12; n >= 0; --n) p = _mm512_fmadd_pd(p, r, _mm512_set1_pd(kTaylor.value[n]));
+  __m512d p = _mm512_set1_pd(kTaylor[13]);
+  for (int n = 12; n >= 0; --n) p = _mm512_fmadd_pd(p, r, _mm512_set1_pd(kTaylor[n]));
   return _mm512_scalef_pd(p, k);
 }
 
@@ -431,15 +434,8 @@ inline __m256d exp_near(__m256d a) {
   const __m256d k = _mm256_round_pd(_mm256_mul_pd(a, _mm256_set1_pd(1.4426950408889634)), _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC);
   const __m256d r = _mm256_fnmadd_pd(k, _mm256_set1_pd(1.90821492927058770002e-10),
                                      _mm256_fnmadd_pd(k, _mm256_set1_pd(6.93147180369123816490e-01), a));
-  struct InverseFactorials {
-    double value[14];
-    constexpr InverseFactorials() : value{1.0} {
-      for (int n = 1; n < 14; ++n) value[n] = value[n - 1] / n;
-    }
-  };
-  static constexpr InverseFactorials kTaylor;
-  __m256d p = _mm256_set1_pd(kTaylor.value[13]);
-  for (int n = 12; n >= 0; --n) p = _mm256_fmadd_pd(p, r, _mm256_set1_pd(kTaylor.value[n]));
+  __m256d p = _mm256_set1_pd(kTaylor[13]);
+  for (int n = 12; n >= 0; --n) p = _mm256_fmadd_pd(p, r, _mm256_set1_pd(kTaylor[n]));
   const __m256i exponent = _mm256_slli_epi64(_mm256_add_epi64(_mm256_cvtepi32_epi64(_mm256_cvtpd_epi32(k)), _mm256_set1_epi64x(1023)), 52);
   return _mm256_mul_pd(p, _mm256_castsi256_pd(exponent));
 }
