@@ -119,9 +119,10 @@ core_address() {
   (
     build address,undefined -asan test_core test_live_simulation gear_run
     "$GD_WS/devel/lib/gear_dynamics/test_live_simulation"
-    # Less the two sampling tests (1 minute here under ASan), which step the code the others step.
+    # Less four long tests (2 minutes here under ASan): two sampling tests and two study tests, whose
+    # code the others step too (the batch runner, the sweep).
     "$GD_WS/devel/lib/gear_dynamics/test_core" \
-      --gtest_filter='-Analytic.LoadProcessMoments:Batch.LoadStatisticsAtTheSnapshotTimes'
+      --gtest_filter='-Analytic.LoadProcessMoments:Batch.LoadStatisticsAtTheSnapshotTimes:Study.KeyWithoutEffectGivesIdenticalResults:Study.LoadAxesShiftPhiAsTheSdePredicts'
     "$GD_WS/devel/lib/gear_dynamics/gear_run" --set run.duration=0.05 --set run.window=0.01 \
       --set "run.snapshot_times=[0.05]" --realizations 4 --rate 0
     echo "sanitize: ASan + UBSan clean (the core)"

@@ -1,10 +1,10 @@
 #!/usr/bin/python3
-"""The sanitizer cases of the fault suite, run by scripts/test.sh after the other tests (they build
+"""The sanitizer cases of the fault suite, run by scripts/test.sh beside the other tests (they build
 workspaces of their own, so they are not a catkin test target). Each case is one mode of
 scripts/sanitize.sh and fails on any sanitizer report:
 
   sanitizer_address  core-address: the core library, its gtests and gear_run built with
-                     -fsanitize=address,undefined; the core gtests (less two long sampling tests)
+                     -fsanitize=address,undefined; the core gtests (less four long ones)
                      and a short stochastic gear_run
   sanitizer_thread   core-thread: the same built with -fsanitize=thread against a libtbb built with
                      it too; the batch runner's gtests (TBB, 1 and 2 threads, shards)
