@@ -132,9 +132,9 @@ core_address() {
 core_thread() {
   (
     tbb=$(instrumented_tbb)
-    build thread -tsan test_core test_live_simulation
+    build thread -tsan test_batch_runner test_live_simulation
     LD_LIBRARY_PATH=$tbb${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH} \
-      "$GD_WS/devel/lib/gear_dynamics/test_core" --gtest_filter='Batch*'
+      "$GD_WS/devel/lib/gear_dynamics/test_batch_runner"
     # The live simulation's hand-off between a caller and its loop thread.
     "$GD_WS/devel/lib/gear_dynamics/test_live_simulation"
     echo "sanitize: TSan clean (the core's batch runner and the live loop)"
