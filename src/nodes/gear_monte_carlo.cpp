@@ -9,6 +9,6 @@ int main(int argc, char** argv) {
   gear_dynamics::MonteCarloNode::install_signal_handlers();
   ros::NodeHandle pnh("~");
   gear_dynamics::MonteCarloNode node(pnh);
-  if (!node.init()) return 2;
+  if (const int code = node.init()) return code;
   return node.run();
 }

@@ -38,7 +38,7 @@ void MonteCarloNode::install_signal_handlers() {
   std::signal(SIGTERM, on_signal);
 }
 
-bool MonteCarloNode::init() {
+int MonteCarloNode::init() {
   try {
     model_ = load_model_config(pnh_);
     settings_ = parse_batch_settings(yaml_from_parameters(pnh_, {"monte_carlo"})["monte_carlo"], model_);
@@ -46,11 +46,16 @@ bool MonteCarloNode::init() {
     runs_ = shard_runs(plan_runs(study_, settings_), settings_.shard_index, settings_.shard_count);
     todo_ = prepare_folder(study_, settings_, runs_);
   } catch (const std::exception& e) {
+    if (g_signal != 0) {  // what failed was interrupted: a stop, not bad input
+      ROS_WARN("gear_monte_carlo: stopped by %s while starting, before any run",
+               g_signal == SIGTERM ? "SIGTERM" : "SIGINT");
+      return 128 + g_signal;
+    }
     ROS_FATAL("gear_monte_carlo: %s", e.what());
-    return false;
+    return 2;
   }
   progress_pub_ = pnh_.advertise<BatchProgress>("progress", 1, true);
-  return true;
+  return 0;
 }
 
 int MonteCarloNode::run() {

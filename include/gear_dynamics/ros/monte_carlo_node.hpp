@@ -28,8 +28,10 @@ class MonteCarloNode {
 
   explicit MonteCarloNode(ros::NodeHandle& private_nh) : pnh_(private_nh) {}
 
-  // Loads and validates the configuration and prepares the folder; false (logged) if refused.
-  bool init();
+  // Loads and validates the configuration and prepares the folder: 0, or the process exit code
+  // (logged): 2 if refused, 128 + signal if SIGINT or SIGTERM came during it (a signal interrupts
+  // the parameter reads from the master, which must not pass for missing parameters).
+  int init();
   // Runs the batch; the process exit code (0 complete, 1 failed, 128 + signal when interrupted).
   int run();
 
