@@ -23,6 +23,8 @@ volatile std::sig_atomic_t g_signal = 0;
 
 extern "C" void on_signal(int sig) { g_signal = sig; }
 
+const char* signal_name() { return g_signal == SIGTERM ? "SIGTERM" : "SIGINT"; }
+
 std::string clock_text(double seconds) {
   if (!(seconds >= 0)) return "?";
   const long s = std::lround(seconds);
@@ -47,8 +49,7 @@ int MonteCarloNode::init() {
     todo_ = prepare_folder(study_, settings_, runs_);
   } catch (const std::exception& e) {
     if (g_signal != 0) {  // what failed was interrupted: a stop, not bad input
-      ROS_WARN("gear_monte_carlo: stopped by %s while starting, before any run",
-               g_signal == SIGTERM ? "SIGTERM" : "SIGINT");
+      ROS_WARN("gear_monte_carlo: stopped by %s while starting, before any run", signal_name());
       return 128 + g_signal;
     }
     ROS_FATAL("gear_monte_carlo: %s", e.what());
@@ -131,7 +132,7 @@ void MonteCarloNode::watch(const BagSink& sink) {
   while (!wake_.wait_for(lock, std::chrono::milliseconds(100), [&] { return finished_; })) {
     if ((g_signal != 0 || !ros::ok()) && !control_.stop) {
       ROS_WARN("gear_monte_carlo: %s: abandoning the runs in flight, keeping the finished bags",
-               g_signal == SIGTERM ? "SIGTERM" : g_signal != 0 ? "SIGINT" : "ROS shutdown");
+               g_signal != 0 ? signal_name() : "ROS shutdown");
       control_.stop = true;
     }
     const double t = elapsed();
