@@ -379,7 +379,10 @@ void LiveSimulation::advance() {
     } else {
       log(LiveLogLevel::Info, format("t_end = %g s reached: stopped (~reset runs again)", settings_.t_end));
       finished_ = true;
-      sink_.finished(sample());
+      // The final state is latched: it carries d(t_end) even when no one wanted the published ones.
+      LiveSample last = sample();
+      last.center_distance = window_.center_distance(0);
+      sink_.finished(last);
     }
   }
 }

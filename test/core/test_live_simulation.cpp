@@ -217,6 +217,27 @@ TEST(LiveSimulation, StopsAtTEnd) {
   EXPECT_FALSE(sim.finished());
 }
 
+TEST(LiveSimulation, FinalSampleHasTheCenterDistanceEvenUnwanted) {
+  // The ROS node wants no center distance while nothing subscribes to the states; its latched
+  // final state must still carry d(t_end), the one a subscribed run publishes last.
+  struct Unwanted : RecordingSink {
+    bool wants_center_distance() const override { return false; }
+  };
+  const Loaded l = load("simulator: {real_time_factor: 0.0, t_end: 0.06}");  // past the 0.05 s window
+  RecordingSink wanting;
+  Unwanted unwanted;
+  gd::LiveSimulation a(l.model, l.sim, wanting);
+  gd::LiveSimulation b(l.model, l.sim, unwanted);
+  run_until_stopped(a);
+  run_until_stopped(b);
+  ASSERT_EQ(wanting.finishes.size(), 1u);
+  ASSERT_EQ(unwanted.finishes.size(), 1u);
+  EXPECT_GT(wanting.finishes[0].center_distance, 0.0);
+  EXPECT_EQ(wanting.finishes[0].center_distance, wanting.samples.back().center_distance);
+  EXPECT_EQ(unwanted.finishes[0].center_distance, wanting.finishes[0].center_distance);
+  EXPECT_EQ(unwanted.samples.back().center_distance, 0.0);  // the published ones skip the query
+}
+
 TEST(LiveSimulation, LoopsAtTEnd) {
   const Loaded l = load("simulator: {real_time_factor: 0.0, t_end: 0.003, loop: true}");
   RecordingSink sink;

@@ -2,7 +2,7 @@
 """simulate.launch as a user meets it. With the defaults the node runs until stopped (t_end 0) under
 the namespace gear: every topic it publishes is /gear/... (or the global /clock, /diagnostics,
 /rosout). A finite run (namespace finite, t_end 0.05 s) keeps its last state for late subscribers:
-/finite/final_state is latched, as is /finite/run_info."""
+/finite/final_state is latched (with its center distance), as is /finite/run_info."""
 import sys
 import time
 import unittest
@@ -44,6 +44,7 @@ class Watchable(unittest.TestCase):
         info = Collector('/finite/run_info', RunInfo)
         m = final.wait_for(len, 10.0, 'the latched final state')[-1]
         self.assertEqual(m.t, 0.05)
+        self.assertGreater(m.center_distance, 0.0)  # d over [0, 0.05] s, though no one took the states
         self.assertEqual(info.wait_for(len, 10.0, 'the latched run_info')[-1].duration, 0.05)
 
     @staticmethod

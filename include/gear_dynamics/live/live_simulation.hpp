@@ -105,7 +105,8 @@ class LiveSink {
   virtual void log(LiveLogLevel level, const std::string& line) = 0;
   // While not running (paused, at t_end, diverged): about every idle period, with the last sample.
   virtual void idle(const LiveSample& /*last*/) {}
-  // At t_end without loop: the last sample (already published), once per run.
+  // At t_end without loop: the last sample (already published), once per run, with its center
+  // distance whatever wants_center_distance() says.
   virtual void finished(const LiveSample& /*last*/) {}
   // Before the loop waits (pacing, idle, a stop), and after an iteration that took kMinWait or
   // more: a sink may hold what publish() handed it until then (the ROS adapter publishes a burst of states back to back: one wake-up of roscpp's
