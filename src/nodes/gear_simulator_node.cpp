@@ -2,15 +2,21 @@
 #include <ros/ros.h>
 
 #include "gear_dynamics/ros/gear_simulator.hpp"
+#include "gear_dynamics/ros/startup_signal.hpp"
 
 int main(int argc, char** argv) {
-  ros::init(argc, argv, "gear_simulator");
+  ros::init(argc, argv, "gear_simulator", ros::init_options::NoSigintHandler);
+  gear_dynamics::install_sigint_handler();
   // Outlive the simulator: when the last NodeHandle goes, roscpp shuts down, logging included.
   ros::NodeHandle nh, private_nh("~");
   try {
     gear_dynamics::GearSimulator simulator(nh, private_nh);
     ros::spin();
   } catch (const gear_dynamics::ConfigError& e) {
+    if (gear_dynamics::sigint_received()) {  // the parameter reads were cut short, not wrong
+      gear_dynamics::warn_at_stop("gear_simulator: stopped by SIGINT while starting");
+      return 0;
+    }
     ROS_FATAL("%s", e.what());
     return 1;
   }

@@ -16,6 +16,7 @@
 #include "gear_dynamics/ros/batch_reader.hpp"
 #include "gear_dynamics/ros/conversions.hpp"
 #include "gear_dynamics/ros/report_message.hpp"
+#include "gear_dynamics/ros/startup_signal.hpp"
 
 extern char** environ;
 
@@ -107,6 +108,7 @@ bool AggregatorNode::wait() {
     }
     ros::WallDuration(kPollPeriod).sleep();
   }
+  warn_at_stop("gear_aggregator: shut down while waiting for the batch in " + first + "; no report");
   return false;
 }
 

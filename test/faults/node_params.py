@@ -6,11 +6,18 @@ node's own top-level keys (gear_aggregator's ~folders, ~wait_timeout, ...) from 
 
 By default every key is broken once, in one of the ways (rotating), through one node that reads it
 (the model's keys alternate between gear_simulator and gear_monte_carlo); --slow breaks every key
-in every way through every node that reads it."""
+in every way through every node that reads it.
+
+And a SIGINT while a node starts (node_signal): it interrupts the node's parameter reads from the
+master, which must not be taken for missing parameters (no FATAL; gear_simulator exits 0 as after
+any Ctrl-C, gear_aggregator 1 with a warning that no report was written)."""
 import concurrent.futures
 import copy
 import os
+import signal
+import subprocess
 import tempfile
+import time
 
 import faultlib as fl
 
@@ -116,6 +123,36 @@ def run(suite):
                     node, path, what, path, out[-3000:])
         with suite.case("node_missing", "gear_monte_carlo__no_batch_folder_created"):
             assert not os.path.exists(os.path.join(cwd, "batch")), "a refused batch created its folder"
+        startup_signals(suite, cwd)
+
+
+def startup_signals(suite, cwd):
+    """SIGINT 5-50 ms after start (about when the parameters are read here; the handler is set a few
+    ms in: -SIGINT before it) and, for the aggregator, once while it waits for a batch that never comes."""
+    for node, delays in (("gear_simulator", [0.005 + 0.005 * i for i in range(10)]),
+                         ("gear_aggregator", [0.005 + 0.005 * i for i in range(10)] + [1.5])):
+        files, extra = NODES[node]
+        params = fl.load_yaml(*[fl.config_file(f) for f in files])
+        params.update(extra)
+        if node == "gear_aggregator":  # waits for ever on an empty folder unless stopped
+            os.makedirs(os.path.join(cwd, "empty"), exist_ok=True)
+            params.update({"folders": os.path.join(cwd, "empty"), "wait_for_batch": True, "wait_timeout": 0})
+        stopped = 0 if node == "gear_simulator" else 1
+        for delay in delays:
+            with suite.case("node_signal", "%s__sigint_at_%.3fs" % (node, delay)):
+                p = fl.start_node(node, fl.node_name(node), params)
+                time.sleep(delay)
+                p.send_signal(signal.SIGINT)
+                try:
+                    out, _ = p.communicate(timeout=NODE_TIMEOUT)
+                except subprocess.TimeoutExpired:
+                    os.killpg(p.pid, signal.SIGKILL)
+                    raise AssertionError("%s did not stop within %g s of SIGINT" % (node, NODE_TIMEOUT))
+                assert p.returncode in (stopped, -signal.SIGINT), \
+                    "%s: exit %s after SIGINT at %g s (expected %d):\n%s" % (node, p.returncode, delay, stopped, out[-3000:])
+                assert "FATAL" not in out, "%s: SIGINT at %g s was reported as an error:\n%s" % (node, delay, out[-3000:])
+                if p.returncode == 1:
+                    assert "no report" in out, "%s: exit 1 without saying why:\n%s" % (node, out[-3000:])
 
 
 if __name__ == "__main__":
