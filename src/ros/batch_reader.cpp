@@ -29,6 +29,7 @@
 #include "gear_dynamics/PoincarePoint.h"
 #include "gear_dynamics/RunInfo.h"
 #include "gear_dynamics/RunSummary.h"
+#include "gear_dynamics/analysis/report_text.hpp"
 
 namespace gear_dynamics {
 
@@ -265,8 +266,6 @@ BagContents read_bag(rosbag::Bag& bag, const fs::path& path, const ManifestRun* 
   std::vector<std::string> topics{kRunInfoTopic, kSummaryTopic, kPoincareTopic};
   if (e || states) topics.emplace_back(kStateTopic);
   BagContents c;
-  std::ostringstream rows;
-  rows.precision(10);
   for (const rosbag::MessageInstance& m : rosbag::View(bag, rosbag::TopicQuery(topics))) {
     const std::string& topic = m.getTopic();
     if (topic == kRunInfoTopic) {
@@ -293,12 +292,23 @@ BagContents read_bag(rosbag::Bag& bag, const fs::path& path, const ManifestRun* 
         c.delta.push_back(s->delta);
         c.delta_dot.push_back(s->delta_dot);
       }
-      if (e)
-        rows << e->name << ',' << to_string(e->kind) << ',' << e->mu << ',' << e->realization << ',' << s->t << ','
-           << s->delta * kToPaperUnits << ',' << s->delta_dot * kToPaperUnits << ',' << s->phi * kToPaperUnits << '\n';
+      if (e) {
+        std::string& row = c.series;
+        row += e->name;
+        row += ',';
+        row += to_string(e->kind);
+        row += ',';
+        report_text::append_general(row, e->mu);
+        row += ',';
+        row += std::to_string(e->realization);
+        for (const double x : {s->t, s->delta * kToPaperUnits, s->delta_dot * kToPaperUnits, s->phi * kToPaperUnits}) {
+          row += ',';
+          report_text::append_general(row, x);
+        }
+        row += '\n';
+      }
     }
   }
-  c.series = rows.str();
   bag.close();
   return c;
 }

@@ -2,6 +2,7 @@
 // study report and the analyses over time, so one value reads the same everywhere.
 #pragma once
 
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -18,11 +19,17 @@ inline std::string fixed(double x, int decimals) {
   return buf;
 }
 
-// %g with `digits` significant digits (10: the CSV files' precision).
-inline std::string general(double x, int digits = 10) {
+// Appends x as %g with `digits` significant digits (10: the CSV files' precision). std::to_chars
+// writes exactly printf's text, at a fraction of its cost (series.csv holds 600000 numbers).
+inline void append_general(std::string& out, double x, int digits = 10) {
   char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*g", digits, x);
-  return buf;
+  out.append(buf, std::to_chars(buf, buf + sizeof buf, x, std::chars_format::general, digits).ptr);
+}
+
+inline std::string general(double x, int digits = 10) {
+  std::string s;
+  append_general(s, x, digits);
+  return s;
 }
 
 // A percentage with its interval: "93.0 [85.0, 96.5]"; "–" without trials.
