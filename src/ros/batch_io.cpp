@@ -84,22 +84,32 @@ YAML::Node batch_config_yaml(const ModelConfig& model, const BatchSettings& sett
 
 const char* manifest_format(const Study& study) { return study.swept() ? kManifestFormatStudy : kManifestFormat; }
 
-RunInfo run_info(const ModelConfig& model, const RunSpec& run) {
-  return make_run_info(run_config(model, run), run.kind, run.index, run.mu, run_lane(model, run).sigma,
-                       model.run.duration);
+RunInfo run_info(const ModelConfig& model, const RunSpec& run) { return RunInfos(model)(run); }
+
+RunInfo run_info(const Study& study, const RunSpec& run) { return RunInfos(study)(run); }
+
+RunInfo RunInfos::operator()(const RunSpec& run) {
+  const ModelConfig config = study_ ? run_config(*study_, run) : run_config(model_, run);
+  const double sigma = (study_ ? run_lane(*study_, run) : run_lane(model_, run)).sigma;
+  return make_run_info(config, run.kind, run.index, run.mu, sigma, model_.run.duration, parameters(config, run));
 }
 
-RunInfo run_info(const Study& study, const RunSpec& run) {
-  RunInfo info = make_run_info(run_config(study, run), run.kind, run.index, run.mu, run_lane(study, run).sigma,
-                               study.base.run.duration);
-  if (study.swept()) {
-    YAML::Node n = YAML::Load(info.parameters_yaml);
-    const StudyPoint& p = study.points.at(run.point);
-    n["study"]["point"] = p.index;
-    for (std::size_t a = 0; a < study.axes.size(); ++a) n["study"]["values"][study.axes[a].key] = p.values[a];
-    info.parameters_yaml = emit(n);
+const std::string& RunInfos::parameters(const ModelConfig& config, const RunSpec& run) {
+  const auto key = std::make_tuple(run.point, run.mu, run.mesh_phase);
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (const auto it = parameters_.find(key); it != parameters_.end()) return it->second;  // map: stays put
   }
-  return info;
+  std::string text = emit(to_yaml(config));
+  if (study_ && study_->swept()) {
+    YAML::Node n = YAML::Load(text);
+    const StudyPoint& p = study_->points.at(run.point);
+    n["study"]["point"] = p.index;
+    for (std::size_t a = 0; a < study_->axes.size(); ++a) n["study"]["values"][study_->axes[a].key] = p.values[a];
+    text = emit(n);
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  return parameters_.emplace(key, std::move(text)).first->second;
 }
 
 namespace {
@@ -171,9 +181,10 @@ std::vector<RunSpec> prepare_folder(const Study& study, const BatchSettings& set
 
   std::vector<RunSpec> todo;
   auto reader = std::make_unique<rosbag::Bag>();
+  RunInfos infos(study);
   for (const RunSpec& run : runs) {
     const fs::path bag = bag_path(settings.output_dir, run.name);
-    if (fs::exists(bag) && bag_complete(reader, bag.string(), run_info(study, run), records_section(study, run)))
+    if (fs::exists(bag) && bag_complete(reader, bag.string(), infos(run), records_section(study, run)))
       continue;
     fs::remove(bag);
     fs::remove(active_path(settings.output_dir, run.name));
@@ -230,13 +241,12 @@ void write_manifest(const Study& study, const BatchSettings& settings,
 }
 
 BagSink::BagSink(const ModelConfig& model, std::string folder, std::size_t queue_capacity)
-    : model_(model), folder_(std::move(folder)), capacity_(queue_capacity), thread_([this] { loop(); }) {}
-
-BagSink::BagSink(const Study& study, std::string folder, std::size_t queue_capacity)
-    : model_(study.base), study_(study), folder_(std::move(folder)), capacity_(queue_capacity),
+    : model_(model), infos_(model_), folder_(std::move(folder)), capacity_(queue_capacity),
       thread_([this] { loop(); }) {}
 
-RunInfo BagSink::info(const RunSpec& run) const { return study_ ? run_info(*study_, run) : run_info(model_, run); }
+BagSink::BagSink(const Study& study, std::string folder, std::size_t queue_capacity)
+    : model_(study.base), study_(study), infos_(*study_), folder_(std::move(folder)), capacity_(queue_capacity),
+      thread_([this] { loop(); }) {}
 
 BagSink::~BagSink() {
   try {
@@ -247,7 +257,7 @@ BagSink::~BagSink() {
 
 void BagSink::started(const std::vector<RunSpec>& block) {
   std::vector<Item> items;
-  for (const RunSpec& r : block) items.push_back({r.id, Open{r.name, info(r)}});
+  for (const RunSpec& r : block) items.push_back({r.id, Open{r.name, infos_(r)}});
   push(std::move(items));
 }
 

@@ -55,6 +55,13 @@ ModelConfig load_model_config(const ros::NodeHandle& nh) {
 
 RunInfo make_run_info(const ModelConfig& config, RunKind kind, std::uint32_t realization,
                       double mu, double sigma, double duration) {
+  YAML::Emitter out;
+  out << to_yaml(config);
+  return make_run_info(config, kind, realization, mu, sigma, duration, out.c_str());
+}
+
+RunInfo make_run_info(const ModelConfig& config, RunKind kind, std::uint32_t realization, double mu, double sigma,
+                      double duration, std::string parameters_yaml) {
   RunInfo m;
   m.header.stamp = sim_stamp(0.0);
   m.package_version = GEAR_DYNAMICS_VERSION;
@@ -67,9 +74,7 @@ RunInfo make_run_info(const ModelConfig& config, RunKind kind, std::uint32_t rea
   m.duration = duration;
   m.mesh_phase = config.gear.mesh_phase;
   m.clock_offset = kClockOffset;
-  YAML::Emitter out;
-  out << to_yaml(config);
-  m.parameters_yaml = out.c_str();
+  m.parameters_yaml = std::move(parameters_yaml);
   return m;
 }
 

@@ -45,6 +45,9 @@ constexpr const char* kManifestFormatStudy = "gear_dynamics_batch/2";
 
 RunInfo make_run_info(const ModelConfig& config, RunKind kind, std::uint32_t realization,
                       double mu, double sigma, double duration);
+// The same with parameters_yaml given (config's YAML, emitted by the caller, who may share it).
+RunInfo make_run_info(const ModelConfig& config, RunKind kind, std::uint32_t realization, double mu, double sigma,
+                      double duration, std::string parameters_yaml);
 // State of `lane` now; center_distance is the instantaneous d(t) (SI).
 GearState make_state(const Ensemble& ensemble, int lane, double center_distance);
 // The live simulation's sample as a message (the same numbers as make_state of its ensemble).
