@@ -25,6 +25,7 @@ WindowRange::WindowRange(int lanes, std::int64_t window_steps, std::int64_t bloc
 
 void WindowRange::reset() {
   last_ = block_index_ = segment_index_ = -1;
+  block_end_ = 0;
   blocks_.setConstant(-kInf);
   suffix_.setConstant(-kInf);
   prefix_.setConstant(-kInf);
@@ -48,9 +49,12 @@ Eigen::ArrayXXd::ColXpr WindowRange::block_of(std::int64_t n) {
       prefix_ = prefix_.max(blocks_.col(block_index_ - segment * segment_));
     }
     block_index_ = block;
+    block_end_ = (block + 1) * block_;
   }
   last_ = n;
-  return blocks_.col(block - segment_index_ * segment_);
+  const Eigen::Index column = static_cast<Eigen::Index>(block - segment_index_ * segment_);
+  current_ = column * blocks_.rows();
+  return blocks_.col(column);
 }
 
 void WindowRange::observe(std::int64_t n, const Eigen::Ref<const Eigen::ArrayXd>& delta,

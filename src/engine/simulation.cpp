@@ -47,6 +47,9 @@ std::vector<RunResult> simulate(Ensemble& ensemble, const RunSettings& settings,
   // Only the windows that are ever read need the sliding observer: the last one, or all of them
   // when recording.
   const std::int64_t range_from = recorder.every > 0 ? 0 : total - window;
+  // The recorded steps are the multiples of recorder.every (counted, not a division per step).
+  const std::int64_t every = recorder.every;
+  std::int64_t next_record = every > 0 ? (ensemble.step_index() + every - 1) / every * every : -1;
   using Packet = Eigen::Array<double, Ensemble::kPacket, 1>;
   const auto observe = [&](std::int64_t n) {
     const double t = ensemble.time();
@@ -62,8 +65,10 @@ std::vector<RunResult> simulate(Ensemble& ensemble, const RunSettings& settings,
     }
     if (snaps.due(n)) snaps.observe(n, ensemble.delta(), ensemble.velocity(), ensemble.load());
     if (poincare) poincare->observe(n, ensemble.delta(), ensemble.velocity());
-    if (recorder.every > 0 && n % recorder.every == 0)
+    if (n == next_record) {
       recorder.record(ensemble, range.center_distance().head(lanes));
+      next_record += every;
+    }
   };
 
   observe(ensemble.step_index());

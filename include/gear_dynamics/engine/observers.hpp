@@ -34,14 +34,21 @@ class WindowRange {
   // Observing in packets of N lanes (simulate()'s one pass per step over a block padded to whole
   // packets): start(n) once for grid step n, then observe_packet(first, ...) for lanes first .. first + N - 1.
   // The same maxima as observe(n, delta, velocity).
-  void start(std::int64_t n) { current_ = block_of(n).data(); }
+  void start(std::int64_t n) {
+    if (n < block_end_) {  // still in the current block: no division (this runs at every step)
+      last_ = n;
+      return;
+    }
+    block_of(n);
+  }
   template <int N>
   void observe_packet(Eigen::Index first, const Eigen::Array<double, N, 1>& delta,
                       const Eigen::Array<double, N, 1>& velocity) {
     using Lanes = Eigen::Map<Eigen::Array<double, N, 1>>;
     const auto l = static_cast<Eigen::Index>(lanes_);
-    Lanes max_delta(current_ + first), max_minus_delta(current_ + l + first);
-    Lanes max_velocity(current_ + 2 * l + first), max_minus_velocity(current_ + 3 * l + first);
+    double* current = blocks_.data() + current_;
+    Lanes max_delta(current + first), max_minus_delta(current + l + first);
+    Lanes max_velocity(current + 2 * l + first), max_minus_velocity(current + 3 * l + first);
     max_delta = max_delta.max(delta);
     max_minus_delta = max_minus_delta.max(-delta);
     max_velocity = max_velocity.max(velocity);
@@ -59,15 +66,16 @@ class WindowRange {
  private:
   // Maxima of (delta, -delta, delta_dot, -delta_dot) stacked: one max covers all four extrema.
   Eigen::ArrayXd reduce() const;
-  // Moves to step n's block (n in order) and returns its column.
+  // Moves to step n's block (n in order) and returns its column (also current_).
   Eigen::ArrayXXd::ColXpr block_of(std::int64_t n);
   int lanes_;
   std::int64_t window_, block_, segment_;  // segment_ = blocks per segment = window/block + 1
   std::int64_t last_ = -1, block_index_ = -1, segment_index_ = -1;
+  std::int64_t block_end_ = 0;  // first step after block block_index_ (0 before any)
   Eigen::ArrayXXd blocks_;  // column i: block segment_index_ * segment_ + i (-inf = no sample)
   Eigen::ArrayXXd suffix_;  // column i: blocks i..segment_-1 of the previous segment
   Eigen::ArrayXd prefix_;   // blocks of the current segment before block_index_
-  double* current_ = nullptr;  // start(n)'s column
+  Eigen::Index current_ = 0;  // offset of block block_index_'s column in blocks_ (an offset: copies stay right)
 };
 
 // t_ss: the last grid time at which |delta - b| > tolerance, 0 if none (doc/model.md §8).
