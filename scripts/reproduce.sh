@@ -26,11 +26,12 @@ rm -f "$report/report.md"
 start=$(date +%s)
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT
-# roslaunch 1.15 exits 0 when a node fails, and the aggregator reads whatever complete batch the
-# folder holds: the batch node's FATAL (e.g. a folder it refuses) must fail the command itself.
+# roslaunch 1.15 exits 0 when a node fails, and the aggregator reads whatever complete bags the
+# folder holds: the command succeeds only if the batch node ended with exit code 0 (roslaunch says
+# "finished cleanly"), not after a refusal (exit 2), a stop (128 + n) or a crash.
 roslaunch -p "$port" gear_dynamics paper.launch output_dir:="$batch" report_folder:="$report" "$@" 2>&1 | tee "$log"
-if grep -q 'FATAL.*gear_monte_carlo' "$log"; then
-  echo "reproduce: gear_monte_carlo failed (see above); $report holds no report of this run" >&2
+if ! grep -q '\[gear_monte_carlo-[0-9]*\] process has finished cleanly' "$log"; then
+  echo "reproduce: gear_monte_carlo did not finish cleanly (see above); $report holds no report of this run" >&2
   rm -f "$report/report.md"
   exit 1
 fi

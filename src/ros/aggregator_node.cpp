@@ -2,12 +2,14 @@
 
 #include <fcntl.h>
 #include <ros/master.h>
+#include <ros/network.h>
+#include <ros/this_node.h>
 #include <spawn.h>
+#include <xmlrpcpp/XmlRpcClient.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <algorithm>
 #include <csignal>
 #include <filesystem>
 
@@ -70,6 +72,29 @@ bool AggregatorNode::run() {
   return true;
 }
 
+namespace {
+
+// Whether `node` is registered with the master and answers at its XML-RPC address (rosnode ping's
+// test). The master alone keeps a node killed by SIGKILL or a crash listed for ever, and the
+// aggregator would wait for it for ever.
+bool node_alive(const std::string& node) {
+  XmlRpc::XmlRpcValue args, response, uri;
+  args[0] = ros::this_node::getName();
+  args[1] = node;
+  if (!ros::master::execute("lookupNode", args, response, uri, false)) return false;
+  std::string host;
+  std::uint32_t port = 0;
+  if (uri.getType() != XmlRpc::XmlRpcValue::TypeString || !ros::network::splitURI(uri, host, port)) return false;
+  XmlRpc::XmlRpcClient client(host.c_str(), static_cast<int>(port), "/");
+  XmlRpc::XmlRpcValue pid_args, pid;
+  pid_args[0] = ros::this_node::getName();
+  const bool answered = client.execute("getPid", pid_args, pid);
+  client.close();
+  return answered;
+}
+
+}  // namespace
+
 bool AggregatorNode::wait() {
   const std::string& first = settings_.folders.front();
   ROS_INFO("gear_aggregator: waiting for the batch in %s", first.c_str());
@@ -92,9 +117,7 @@ bool AggregatorNode::wait() {
       for (const std::string& f : settings_.folders) complete = complete && batch_complete(f);
       if (complete) return true;
     }
-    std::vector<std::string> nodes;
-    const bool running = ros::master::getNodes(nodes) &&
-                         std::find(nodes.begin(), nodes.end(), settings_.batch_node) != nodes.end();
+    const bool running = node_alive(settings_.batch_node);
     if (running) seen = true;
     if (seen && !running) {
       ROS_WARN("gear_aggregator: %s ended before its batch was complete; aggregating what it left",

@@ -2,7 +2,8 @@
 """Faults in a Monte Carlo batch: SIGINT, SIGTERM and SIGKILL at random moments, the output folder
 made unwritable mid-run, the disk filling up (a small tmpfs). After each: every .bag in the folder
 is complete and readable, the aggregator counts exactly those bags (no partial one), and a resume
-completes the batch to bags and report CSV files byte-identical to an uninterrupted batch.
+completes the batch to bags and report CSV files byte-identical to an uninterrupted batch. And the
+README's main command (scripts/reproduce.sh) when its batch node does not finish cleanly: it fails.
 
 Quick selection by default (one or two cases of each kind); --slow runs more random moments."""
 import ctypes
@@ -159,6 +160,61 @@ def signal_case(suite, reference, work, sig, index, earliest=0.05, latest=None):
     shutil.rmtree(folder, ignore_errors=True)
 
 
+def descendants(pid):
+    """The processes below `pid` (from /proc): {pid: command name}."""
+    children, names = {}, {}
+    for entry in filter(str.isdigit, os.listdir("/proc")):
+        try:
+            with open("/proc/%s/stat" % entry) as f:
+                stat = f.read()
+        except OSError:  # ended meanwhile
+            continue
+        name, rest = stat[stat.index("(") + 1:stat.rindex(")")], stat[stat.rindex(")") + 2:].split()
+        names[int(entry)] = name
+        children.setdefault(int(rest[1]), []).append(int(entry))
+    out, todo = {}, [pid]
+    while todo:
+        for c in children.get(todo.pop(), []):
+            out[c] = names[c]
+            todo.append(c)
+    return out
+
+
+def main_command_case(suite, work, what):
+    """roslaunch exits 0 when a node dies, and the aggregator then reports the bags it finds: the
+    main command must fail when its batch node did not finish cleanly, here killed by SIGKILL once
+    its first bags are written (no FATAL line to see) or refusing its folder, and leave no report.md."""
+    folder, report = os.path.join(work, "main_" + what), os.path.join(work, "main_%s_report" % what)
+    with suite.case("main_command", what):
+        os.makedirs(folder)
+        if what == "refused_folder":
+            open(os.path.join(folder, "notes.txt"), "w").close()  # not a batch folder: refused
+        env = dict(os.environ, GD_OUTPUT=folder, GD_REPORT=report)
+        # The clone's own path, not the workspace's symlink to it: setup.sh names the workspace after it.
+        script = os.path.join(os.path.realpath(fl.package_dir()), "scripts", "reproduce.sh")
+        p = subprocess.Popen(["bash", script], env=env,
+                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, start_new_session=True)
+        try:
+            if what == "batch_killed":
+                deadline = time.time() + 120
+                while not any(f.endswith(".bag") for f in os.listdir(folder)):
+                    assert time.time() < deadline and p.poll() is None, "no bag was written"
+                    time.sleep(0.05)
+                batch = [pid for pid, name in descendants(p.pid).items() if name.startswith("gear_monte_car")]
+                assert batch, "no gear_monte_carlo below reproduce.sh"
+                os.kill(batch[0], signal.SIGKILL)
+            out, _ = p.communicate(timeout=180)
+        finally:
+            if p.poll() is None:
+                os.killpg(p.pid, signal.SIGKILL)
+                p.communicate()
+        assert p.returncode == 1, "reproduce.sh exited %s, expected 1:\n%s" % (p.returncode, out[-3000:])
+        assert "did not finish cleanly" in out, "no reason given:\n%s" % out[-3000:]
+        assert not os.path.exists(os.path.join(report, "report.md")), "a report.md was left"
+    shutil.rmtree(folder, ignore_errors=True)
+    shutil.rmtree(report, ignore_errors=True)
+
+
 def unwritable_case(suite, reference, work, index):
     name = "unwritable_%d" % index
     folder, report = os.path.join(work, name), os.path.join(work, name + "_report")
@@ -228,6 +284,8 @@ def run(suite):
             unwritable_case(suite, reference, work, i)
         for i in range(2 if suite.args.slow else 1):
             disk_full_case(suite, reference, work, i)
+        for what in ("batch_killed", "refused_folder"):
+            main_command_case(suite, work, what)
     finally:
         for root, dirs, _ in os.walk(work):
             for d in dirs:
