@@ -20,7 +20,8 @@ const Section<AggregatorSettings>& aggregator_section() {
           .may_be_empty()
           .key("wait_for_batch", GD_MEMBER(wait_for_batch), "wait until every run the manifests list has its bag, or until batch_node has come and gone")
           .optional()
-          .key("batch_node", GD_MEMBER(batch_node), "the batch node to watch while waiting")
+          .key("batch_node", GD_MEMBER(batch_node), "the batch node to watch while waiting: running while the master lists it and it answers at its "
+               "XML-RPC address (rosnode ping's test; the master keeps listing a node killed by SIGKILL or a crash)")
           .optional()
           .key("wait_timeout", GD_MEMBER(wait_timeout), closed_open(0, kInf), "s",
                "give up waiting after this long (exit status 1); 0 = no limit")
