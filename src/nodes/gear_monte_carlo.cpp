@@ -2,11 +2,12 @@
 #include <ros/ros.h>
 
 #include "gear_dynamics/ros/monte_carlo_node.hpp"
+#include "gear_dynamics/ros/stop_signal.hpp"
 
 int main(int argc, char** argv) {
-  // Our own handlers: a signal stops the batch cleanly instead of shutting ROS down at once.
   ros::init(argc, argv, "gear_monte_carlo", ros::init_options::NoSigintHandler);
-  gear_dynamics::MonteCarloNode::install_signal_handlers();
+  // SIGINT and SIGTERM stop the batch cleanly (finished bags kept) instead of shutting ROS down at once.
+  gear_dynamics::install_stop_handlers(gear_dynamics::OnSigint::OnlyRemember);
   ros::NodeHandle pnh("~");
   gear_dynamics::MonteCarloNode node(pnh);
   if (const int code = node.init()) return code;

@@ -2,18 +2,18 @@
 #include <ros/ros.h>
 
 #include "gear_dynamics/ros/gear_simulator.hpp"
-#include "gear_dynamics/ros/startup_signal.hpp"
+#include "gear_dynamics/ros/stop_signal.hpp"
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "gear_simulator", ros::init_options::NoSigintHandler);
-  gear_dynamics::install_sigint_handler();
+  gear_dynamics::install_stop_handlers(gear_dynamics::OnSigint::RequestShutdown);
   // Outlive the simulator: when the last NodeHandle goes, roscpp shuts down, logging included.
   ros::NodeHandle nh, private_nh("~");
   try {
     gear_dynamics::GearSimulator simulator(nh, private_nh);
     ros::spin();
   } catch (const gear_dynamics::ConfigError& e) {
-    if (gear_dynamics::sigint_received()) {  // the parameter reads were cut short, not wrong
+    if (gear_dynamics::stop_signal() != 0) {  // the parameter reads were cut short, not wrong
       gear_dynamics::warn_at_stop("gear_simulator: stopped by SIGINT while starting");
       return 0;
     }

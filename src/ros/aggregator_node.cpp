@@ -18,7 +18,7 @@
 #include "gear_dynamics/ros/batch_reader.hpp"
 #include "gear_dynamics/ros/conversions.hpp"
 #include "gear_dynamics/ros/report_message.hpp"
-#include "gear_dynamics/ros/startup_signal.hpp"
+#include "gear_dynamics/ros/stop_signal.hpp"
 
 extern char** environ;
 

@@ -376,15 +376,14 @@ void GearSimulator::publish_clock(std::chrono::steady_clock::time_point now, dou
 void GearSimulator::run_info(const LiveRunInfo& i) {
   flush();  // the states before the change
   const bool deterministic = i.settings.deterministic;
-  RunInfo info = make_run_info(i.config, deterministic ? RunKind::S1 : RunKind::Stochastic,
-                               static_cast<std::uint32_t>(i.lane.realization), i.lane.mu, i.lane.sigma,
-                               i.settings.t_end);
-  info.header.stamp = sim_stamp(i.t);  // these values hold from here on
   YAML::Node all = to_yaml(i.config);
   all["simulator"] = to_yaml(i.settings);
   YAML::Emitter out;
   out << all;
-  info.parameters_yaml = out.c_str();
+  RunInfo info = make_run_info(i.config, deterministic ? RunKind::S1 : RunKind::Stochastic,
+                               static_cast<std::uint32_t>(i.lane.realization), i.lane.mu, i.lane.sigma,
+                               i.settings.t_end, out.c_str());
+  info.header.stamp = sim_stamp(i.t);  // these values hold from here on
   run_info_pub_.publish(info);
   try {
     record_open();  // after t_end and a ~reset: the next bag

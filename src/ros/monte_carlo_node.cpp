@@ -3,7 +3,6 @@
 #include <ros/ros.h>
 #include <sys/resource.h>
 
-#include <csignal>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -14,16 +13,11 @@
 #include "gear_dynamics/montecarlo/batch.hpp"
 #include "gear_dynamics/ros/batch_io.hpp"
 #include "gear_dynamics/ros/conversions.hpp"
+#include "gear_dynamics/ros/stop_signal.hpp"
 
 namespace gear_dynamics {
 
 namespace {
-
-volatile std::sig_atomic_t g_signal = 0;
-
-extern "C" void on_signal(int sig) { g_signal = sig; }
-
-const char* signal_name() { return g_signal == SIGTERM ? "SIGTERM" : "SIGINT"; }
 
 std::string clock_text(double seconds) {
   if (!(seconds >= 0)) return "?";
@@ -35,11 +29,6 @@ std::string clock_text(double seconds) {
 
 }  // namespace
 
-void MonteCarloNode::install_signal_handlers() {
-  std::signal(SIGINT, on_signal);
-  std::signal(SIGTERM, on_signal);
-}
-
 int MonteCarloNode::init() {
   try {
     model_ = load_model_config(pnh_);
@@ -48,9 +37,9 @@ int MonteCarloNode::init() {
     runs_ = shard_runs(plan_runs(study_, settings_), settings_.shard_index, settings_.shard_count);
     todo_ = prepare_folder(study_, settings_, runs_);
   } catch (const std::exception& e) {
-    if (g_signal != 0) {  // what failed was interrupted: a stop, not bad input
-      ROS_WARN("gear_monte_carlo: stopped by %s while starting, before any run", signal_name());
-      return 128 + g_signal;
+    if (stop_signal() != 0) {  // what failed was interrupted: a stop, not bad input
+      ROS_WARN("gear_monte_carlo: stopped by %s while starting, before any run", stop_signal_name());
+      return 128 + stop_signal();
     }
     ROS_FATAL("gear_monte_carlo: %s", e.what());
     return 2;
@@ -118,7 +107,7 @@ int MonteCarloNode::run() {
     return 1;
   }
   if (complete) return 0;
-  return g_signal != 0 ? 128 + g_signal : 1;
+  return stop_signal() != 0 ? 128 + stop_signal() : 1;
 }
 
 double MonteCarloNode::elapsed() const {
@@ -130,9 +119,9 @@ void MonteCarloNode::watch(const BagSink& sink) {
   double next_log = kLogPeriod, next_publish = kPublishPeriod;
   std::unique_lock<std::mutex> lock(mutex_);
   while (!wake_.wait_for(lock, std::chrono::milliseconds(100), [&] { return finished_; })) {
-    if ((g_signal != 0 || !ros::ok()) && !control_.stop) {
+    if ((stop_signal() != 0 || !ros::ok()) && !control_.stop) {
       ROS_WARN("gear_monte_carlo: %s: abandoning the runs in flight, keeping the finished bags",
-               g_signal != 0 ? signal_name() : "ROS shutdown");
+               stop_signal() != 0 ? stop_signal_name() : "ROS shutdown");
       control_.stop = true;
     }
     const double t = elapsed();

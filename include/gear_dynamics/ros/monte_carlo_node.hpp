@@ -22,10 +22,6 @@ class BagSink;
 
 class MonteCarloNode {
  public:
-  // SIGINT and SIGTERM stop the batch cleanly (finished bags kept) instead of shutting ROS down at
-  // once: call before ros::init with ros::init_options::NoSigintHandler.
-  static void install_signal_handlers();
-
   explicit MonteCarloNode(ros::NodeHandle& private_nh) : pnh_(private_nh) {}
 
   // Loads and validates the configuration and prepares the folder: 0, or the process exit code

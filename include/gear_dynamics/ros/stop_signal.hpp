@@ -1,0 +1,26 @@
+// SIGINT and SIGTERM as a node's stop request, remembered. A signal while a node starts interrupts
+// its parameter reads (XML-RPC calls to the master), which then look like missing parameters: a
+// node that fails to start asks stop_signal() before it reports bad input.
+#pragma once
+
+#include <string>
+
+namespace gear_dynamics {
+
+// How a node stops on SIGINT.
+enum class OnSigint {
+  RequestShutdown,  // roscpp's own behaviour (ros::spin returns); SIGTERM keeps its default action
+  OnlyRemember,     // the node polls stop_signal() and stops its work cleanly; SIGTERM the same
+};
+
+// Call right after ros::init(..., ros::init_options::NoSigintHandler).
+void install_stop_handlers(OnSigint on_sigint);
+
+int stop_signal();                // 0, or the last SIGINT or SIGTERM received
+const char* stop_signal_name();  // "SIGINT" or "SIGTERM"
+
+// ROS_WARN, or straight to stderr once roscpp has begun to shut down: its shutdown turns rosconsole
+// off, and a node's last words (why it stops without its product) would be lost.
+void warn_at_stop(const std::string& line);
+
+}  // namespace gear_dynamics

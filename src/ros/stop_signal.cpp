@@ -1,0 +1,42 @@
+#include "gear_dynamics/ros/stop_signal.hpp"
+
+#include <ros/console.h>
+#include <ros/init.h>
+
+#include <csignal>
+#include <cstdio>
+
+namespace gear_dynamics {
+
+namespace {
+volatile std::sig_atomic_t g_signal = 0;
+
+extern "C" void remember(int sig) { g_signal = sig; }
+
+extern "C" void remember_and_shut_down(int sig) {
+  g_signal = sig;
+  ros::requestShutdown();  // what roscpp's handler does: sets a flag its threads poll
+}
+}  // namespace
+
+void install_stop_handlers(OnSigint on_sigint) {
+  if (on_sigint == OnSigint::RequestShutdown) {
+    std::signal(SIGINT, remember_and_shut_down);
+  } else {
+    std::signal(SIGINT, remember);
+    std::signal(SIGTERM, remember);
+  }
+}
+
+int stop_signal() { return g_signal; }
+
+const char* stop_signal_name() { return g_signal == SIGTERM ? "SIGTERM" : "SIGINT"; }
+
+void warn_at_stop(const std::string& line) {
+  if (ros::isShuttingDown())
+    std::fprintf(stderr, "[ WARN] %s\n", line.c_str());
+  else
+    ROS_WARN("%s", line.c_str());
+}
+
+}  // namespace gear_dynamics
