@@ -7,7 +7,6 @@
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
-#include <unordered_set>
 
 namespace gear_dynamics {
 
@@ -180,20 +179,15 @@ std::vector<RunSpec> prepare_folder(const Study& study, const BatchSettings& set
     }
   }
 
-  // The folder's files, listed once: a new folder costs no stat or unlink per run (990 of each for
-  // the default batch).
-  std::unordered_set<std::string> files;
-  for (const auto& entry : fs::directory_iterator(dir)) files.insert(entry.path().filename().string());
   std::vector<RunSpec> todo;
   auto reader = std::make_unique<rosbag::Bag>();
   RunInfos infos(study);
   for (const RunSpec& run : runs) {
     const fs::path bag = bag_path(settings.output_dir, run.name);
-    const bool present = files.count(bag.filename().string()) > 0;
-    if (present && bag_complete(reader, bag.string(), infos(run), records_section(study, run))) continue;
-    if (present) fs::remove(bag);
-    const fs::path active = active_path(settings.output_dir, run.name);
-    if (files.count(active.filename().string()) > 0) fs::remove(active);
+    if (fs::exists(bag) && bag_complete(reader, bag.string(), infos(run), records_section(study, run)))
+      continue;
+    fs::remove(bag);
+    fs::remove(active_path(settings.output_dir, run.name));
     todo.push_back(run);
   }
   return todo;
