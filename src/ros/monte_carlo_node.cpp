@@ -37,9 +37,9 @@ int MonteCarloNode::init() {
     runs_ = shard_runs(plan_runs(study_, settings_), settings_.shard_index, settings_.shard_count);
     todo_ = prepare_folder(study_, settings_, runs_);
   } catch (const std::exception& e) {
-    if (stop_signal() != 0) {  // what failed was interrupted: a stop, not bad input
+    if (const int sig = stop_signal()) {  // what failed was interrupted: a stop, not bad input
       ROS_WARN("gear_monte_carlo: stopped by %s while starting, before any run", stop_signal_name());
-      return 128 + stop_signal();
+      return 128 + sig;
     }
     ROS_FATAL("gear_monte_carlo: %s", e.what());
     return 2;
@@ -107,7 +107,8 @@ int MonteCarloNode::run() {
     return 1;
   }
   if (complete) return 0;
-  return stop_signal() != 0 ? 128 + stop_signal() : 1;
+  const int sig = stop_signal();  // read once: a second signal may arrive meanwhile
+  return sig != 0 ? 128 + sig : 1;
 }
 
 double MonteCarloNode::elapsed() const {
