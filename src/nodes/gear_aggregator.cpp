@@ -8,6 +8,7 @@ int main(int argc, char** argv) {
   ros::init(argc, argv, "gear_aggregator", ros::init_options::NoSigintHandler);
   gear_dynamics::install_stop_handlers(gear_dynamics::OnSigint::RequestShutdown);
   ros::NodeHandle private_nh("~");
+  gear_dynamics::repeat_early_stop();
   try {
     gear_dynamics::AggregatorNode aggregator(private_nh);
     if (!aggregator.run()) return 1;

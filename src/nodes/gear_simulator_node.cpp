@@ -9,6 +9,7 @@ int main(int argc, char** argv) {
   gear_dynamics::install_stop_handlers(gear_dynamics::OnSigint::RequestShutdown);
   // Outlive the simulator: when the last NodeHandle goes, roscpp shuts down, logging included.
   ros::NodeHandle nh, private_nh("~");
+  gear_dynamics::repeat_early_stop();
   try {
     gear_dynamics::GearSimulator simulator(nh, private_nh);
     ros::spin();

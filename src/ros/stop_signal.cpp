@@ -28,6 +28,10 @@ void install_stop_handlers(OnSigint on_sigint) {
   }
 }
 
+void repeat_early_stop() {
+  if (g_signal == SIGINT) ros::requestShutdown();
+}
+
 int stop_signal() { return g_signal; }
 
 const char* stop_signal_name() { return g_signal == SIGTERM ? "SIGTERM" : "SIGINT"; }

@@ -16,6 +16,11 @@ enum class OnSigint {
 // Call right after ros::init(..., ros::init_options::NoSigintHandler).
 void install_stop_handlers(OnSigint on_sigint);
 
+// ros::start() (the first NodeHandle) clears a shutdown request made before it: with
+// RequestShutdown, call after the first NodeHandle, so that a SIGINT that came earlier still stops
+// the node (it once ran on for ever after a SIGINT 10 ms into its start).
+void repeat_early_stop();
+
 int stop_signal();                // 0, or the last SIGINT or SIGTERM received
 const char* stop_signal_name();  // "SIGINT" or "SIGTERM"
 
