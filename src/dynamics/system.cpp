@@ -13,6 +13,7 @@ GearLanes::GearLanes(const std::vector<GearLaneSpec>& lanes, double time_step) :
   const int n = static_cast<int>(lanes.size());
   const int p = (n + Ensemble::kPacket - 1) / Ensemble::kPacket * Ensemble::kPacket;
   for (Eigen::ArrayXd* a : {&d_, &v_, &load_, &mu_, &q3_, &b_, &alpha_, &k_, &fa_, &fm_, &fb_}) a->setZero(p);
+  b_.setOnes();  // padding lanes rest at 0, far from their boundaries: never located
   lane_.reserve(lanes.size());
   plan_.resize(lanes.size());
   for (int i = 0; i < n; ++i) {

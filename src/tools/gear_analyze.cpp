@@ -19,6 +19,7 @@
 #include "gear_dynamics/analysis/statistics.hpp"
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/dynamics/bifurcation.hpp"
+#include "gear_dynamics/dynamics/lyapunov.hpp"
 #include "gear_dynamics/dynamics/poincare.hpp"
 #include "gear_dynamics/dynamics/safety.hpp"
 #include "gear_dynamics/dynamics/spectrum.hpp"
@@ -40,10 +41,14 @@ Nonlinear-dynamics tools for the spur-gear model (doc/nonlinear-dynamics.md). Su
   bifurcation   Poincare points of deterministic runs vs one parameter
                   --parameter speed|load|mu|damping (speed [rpm], load = Phi0 [m/s^2], mu, zeta_ref)
                   --from X --to Y --values N (400)  --log  --transient S (1.0)
-  lyapunov      largest Lyapunov exponent (two trajectories, renormalised every --renormalise
-                steps) of S1 over the phase ensemble, or along a parameter (--parameter ...)
-                  --phases P (64)  --transient S (0.2)  --renormalise N (100)
-                  --separation D0 (1e-8, in units of b and v_ref)  --step-divisor M (1; 2 = h/2)
+  lyapunov      Lyapunov exponents of S1 over the phase ensemble, or along a parameter
+                (--parameter ...), averaged over [--transient, --duration]. --method tangent:
+                both exponents from the variational equation, orthonormalised every
+                --renormalise steps, with the trace check and per-window values; --method pairs:
+                the largest from two trajectories renormalised every --renormalise steps
+                  --method tangent|pairs (tangent)  --phases P (64)  --transient S (0.2)
+                  --renormalise N (100)  --windows T0,T1,... (0,0.1,0.2,0.4; tangent)
+                  --separation D0 (1e-8, in units of b and v_ref; pairs)  --step-divisor M (1; 2 = h/2)
                   --parameter NAME --from X --to Y --values N [--log]
   safety        P(delta in I_d and delta_dot in I_v) over time with Wilson bands, first passage
                 out of the safe set after --settle, Kaplan-Meier survival, PDFs (histogram + KDE)
@@ -85,7 +90,7 @@ Options parse(int argc, char** argv) {
   static const std::vector<std::string> valued = {
       "realizations", "transient", "decimate", "segment", "overlap", "harmonics", "phases", "parameter",
       "from", "to", "values", "renormalise", "separation", "step-divisor", "record-every", "settle",
-      "delta-interval", "velocity-interval", "duration"};
+      "delta-interval", "velocity-interval", "duration", "method", "windows"};
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
     auto value = [&]() -> std::string {
@@ -348,10 +353,124 @@ int bifurcation(const Options& o) {
 }
 
 // ---------------------------------------------------------------------------------------------
-int lyapunov(const Options& o) {
-  gd::ModelConfig c = load_config(o, 0);
+struct LyapunovRuns {
+  std::vector<gd::GearLaneSpec> specs;
+  std::vector<double> values;
+  std::string column;  // the CSV column of `values`
+  std::string what;    // "phases" or "values"
+};
+
+LyapunovRuns lyapunov_runs(const Options& o, const gd::ModelConfig& c) {
+  LyapunovRuns r;
+  if (o.kv.count("parameter") > 0) {
+    const gd::ScanParameter p = gd::parse_scan_parameter(o.str("parameter", "speed"));
+    r.values = value_list(o);
+    for (double v : r.values) {
+      const gd::ModelConfig cv = gd::with_parameter(c, p, v);
+      r.specs.push_back({cv.gear, cv.friction_coefficient, cv.load.initial_mean, cv.initial});
+    }
+    r.column = gd::scan_parameter_name(p);
+    r.what = "values";
+    return r;
+  }
+  const int P = static_cast<int>(o.get("phases", 64));
+  const gd::GearPair g = gd::derive(c.gear);
+  for (int j = 0; j < P; ++j) {
+    gd::GearInputs gi = c.gear;
+    gi.mesh_phase = j * g.mesh_period_angle / P;
+    r.values.push_back(gi.mesh_phase);
+    r.specs.push_back({gi, c.friction_coefficient, c.load.initial_mean, c.initial});
+  }
+  r.column = "phase0";
+  r.what = "phases";
+  return r;
+}
+
+void print_box(const char* what, const std::vector<double>& x) {
+  const gd::BoxStats bs = gd::box_stats(x);
+  std::printf("%s: median %.4g, 95%% interval of the median [%.4g, %.4g], min %.4g, Q1 %.4g, Q3 %.4g, max %.4g\n", what,
+              bs.median, bs.median_low, bs.median_high, bs.min, bs.q1, bs.q3, bs.max);
+}
+
+std::vector<double> number_list(const std::string& s) {
+  std::vector<double> out;
+  std::stringstream in(s);
+  for (std::string item; std::getline(in, item, ',');) out.push_back(std::stod(item));
+  return out;
+}
+
+// Both exponents from the tangent flow, per run; the main window is [transient, duration].
+int lyapunov_tangent(const Options& o, const gd::ModelConfig& c, double h, const LyapunovRuns& runs) {
+  gd::SpectrumOptions so;
+  so.duration = o.get("duration", 1.2);
+  const double transient = o.get("transient", 0.2);
+  so.orthonormalise_every = static_cast<std::int64_t>(o.get("renormalise", 100)) * static_cast<std::int64_t>(o.get("step-divisor", 1));
+  std::vector<double> edges = number_list(o.str("windows", "0,0.1,0.2,0.4"));
+  edges.push_back(transient);
+  edges.push_back(so.duration);
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end(), [](double a, double b) { return std::fabs(a - b) < 1e-12; }),
+              edges.end());
+  edges.erase(std::remove_if(edges.begin(), edges.end(), [&](double e) { return e < 0 || e > so.duration + 1e-12; }),
+              edges.end());
+  so.windows = edges;
+  const int n = static_cast<int>(runs.specs.size());
+  std::vector<gd::LyapunovSpectrum> res(n);
+  const auto t0 = std::chrono::steady_clock::now();
+  tbb::parallel_for(0, n, [&](int i) {
+    gd::SpectrumOptions si = so;
+    si.scale = {c.gear.backlash, std::sqrt(2.0 * std::abs(c.load.initial_mean) * c.gear.backlash)};
+    res[i] = gd::lyapunov_spectrum(runs.specs[i], h, si);
+  });
+  const double wall = since(t0);
+  const auto main_window = [&](const gd::LyapunovSpectrum& r) {
+    for (const auto& w : r.windows)
+      if (std::fabs(w.start - transient) < 1e-12 && std::fabs(w.end - so.duration) < 1e-12) return w;
+    return gd::SpectrumWindow{};
+  };
+  std::ofstream f = open_csv(o, "lyapunov");
+  f << runs.column << ",exponent,exponent2,trace,liouville_error\n";
+  std::vector<double> l1, l2, liouville;
+  for (int i = 0; i < n; ++i) {
+    const gd::SpectrumWindow w = main_window(res[i]);
+    const double err = res[i].exponent[0] + res[i].exponent[1] - res[i].trace;  // over [0, duration]
+    f << runs.values[i] << "," << w.exponent[0] << "," << w.exponent[1] << "," << w.trace << "," << err << "\n";
+    l1.push_back(w.exponent[0]);
+    l2.push_back(w.exponent[1]);
+    liouville.push_back(std::fabs(err));
+  }
+  std::ofstream fw = open_csv(o, "lyapunov_windows");
+  fw << "id,value,start,end,exponent,exponent2,trace\n";
+  for (int i = 0; i < n; ++i)
+    for (const auto& w : res[i].windows)
+      fw << i << "," << runs.values[i] << "," << w.start << "," << w.end << "," << w.exponent[0] << "," << w.exponent[1]
+         << "," << w.trace << "\n";
+  std::ofstream fr = open_csv(o, "lyapunov_running");
+  fr << "id,value,t,running\n";
+  for (int i = 0; i < n; ++i)
+    for (std::size_t k = 0; k < res[i].time.size(); ++k)
+      fr << i << "," << runs.values[i] << "," << res[i].time[k] << "," << res[i].running[k] << "\n";
+  std::printf("# lyapunov (tangent): h %g s, averaged over [%g, %g] s, orthonormalised every %lld steps (%g s), mu %g, "
+              "%d %s, %.1f s wall\n",
+              h, transient, so.duration, static_cast<long long>(so.orthonormalise_every), so.orthonormalise_every * h,
+              c.friction_coefficient, n, runs.what.c_str(), wall);
+  print_box("largest exponent [1/s]", l1);
+  print_box("second exponent [1/s]", l2);
+  std::printf("|lambda1 + lambda2 - mean trace| over [0, %g] s: max %.3g 1/s\n", so.duration,
+              *std::max_element(liouville.begin(), liouville.end()));
+  for (std::size_t k = 0; k + 1 < edges.size(); ++k) {
+    std::vector<double> wk;
+    for (const auto& r : res) wk.push_back(r.windows[k].exponent[0]);
+    char label[80];
+    std::snprintf(label, sizeof label, "lambda1 over [%g, %g] s", edges[k], edges[k + 1]);
+    print_box(label, wk);
+  }
+  return 0;
+}
+
+// The largest exponent from two trajectories per run (the cross-check of the tangent method).
+int lyapunov_pairs(const Options& o, const gd::ModelConfig& c, double h, const LyapunovRuns& runs) {
   const int M = static_cast<int>(o.get("step-divisor", 1));
-  const double h = c.run.time_step / M;
   const double b = c.gear.backlash;
   gd::LyapunovOptions lo;
   lo.transient = o.get("transient", 0.2);
@@ -359,37 +478,15 @@ int lyapunov(const Options& o) {
   lo.renormalise_every = static_cast<std::int64_t>(o.get("renormalise", 100)) * M;
   lo.separation = o.get("separation", 1e-8);
   lo.record_every = 10;
-  const bool scan = o.kv.count("parameter") > 0;
-  std::vector<double> values;
-  std::vector<gd::GearLaneSpec> specs;
-  gd::ScanParameter p = gd::ScanParameter::Speed;
-  if (scan) {
-    p = gd::parse_scan_parameter(o.str("parameter", "speed"));
-    values = value_list(o);
-    for (double v : values) {
-      const gd::ModelConfig cv = gd::with_parameter(c, p, v);
-      specs.push_back({cv.gear, cv.friction_coefficient, cv.load.initial_mean, cv.initial});
-    }
-  } else {
-    const int P = static_cast<int>(o.get("phases", 64));
-    const gd::GearPair g = gd::derive(c.gear);
-    for (int j = 0; j < P; ++j) {
-      gd::GearInputs gi = c.gear;
-      gi.mesh_phase = j * g.mesh_period_angle / P;
-      values.push_back(gi.mesh_phase);
-      specs.push_back({gi, c.friction_coefficient, c.load.initial_mean, c.initial});
-    }
-  }
-  const int n = static_cast<int>(specs.size());
+  const int n = static_cast<int>(runs.specs.size());
   std::vector<gd::LyapunovResult> res(n);
   const auto t0 = std::chrono::steady_clock::now();
   const int per = 4;
   tbb::parallel_for(0, (n + per - 1) / per, [&](int blk) {
     std::vector<gd::GearLaneSpec> lanes;
-    std::vector<double> scale;
     for (int i = blk * per; i < std::min(n, blk * per + per); ++i) {
-      lanes.push_back(specs[i]);
-      lanes.push_back(specs[i]);
+      lanes.push_back(runs.specs[i]);
+      lanes.push_back(runs.specs[i]);
     }
     gd::GearLanes sys(lanes, h);
     gd::LyapunovOptions l = lo;
@@ -399,10 +496,10 @@ int lyapunov(const Options& o) {
   });
   const double wall = since(t0);
   std::ofstream f = open_csv(o, "lyapunov");
-  f << (scan ? gd::scan_parameter_name(p) : std::string("phase0")) << ",exponent,max_log_growth,min_log_growth,intervals\n";
+  f << runs.column << ",exponent,max_log_growth,min_log_growth,intervals\n";
   std::vector<double> ex;
   for (int i = 0; i < n; ++i) {
-    f << values[i] << "," << res[i].exponent << "," << res[i].max_log_growth << "," << res[i].min_log_growth << ","
+    f << runs.values[i] << "," << res[i].exponent << "," << res[i].max_log_growth << "," << res[i].min_log_growth << ","
       << res[i].intervals << "\n";
     ex.push_back(res[i].exponent);
   }
@@ -410,19 +507,26 @@ int lyapunov(const Options& o) {
   fr << "id,value,t,running\n";
   for (int i = 0; i < n; ++i)
     for (std::size_t k = 0; k < res[i].time.size(); ++k)
-      fr << i << "," << values[i] << "," << res[i].time[k] << "," << res[i].running[k] << "\n";
-  const gd::BoxStats bs = gd::box_stats(ex);
+      fr << i << "," << runs.values[i] << "," << res[i].time[k] << "," << res[i].running[k] << "\n";
   double gmax = -1e300, gmin = 1e300;
   for (const auto& r : res) { gmax = std::max(gmax, r.max_log_growth); gmin = std::min(gmin, r.min_log_growth); }
-  std::printf("# lyapunov: h %g s, transient %g s, averaged over %g s, renormalised every %lld steps (%g s), d0 %g "
+  std::printf("# lyapunov (pairs): h %g s, transient %g s, averaged over %g s, renormalised every %lld steps (%g s), d0 %g "
               "(units b = %g m, v_ref = %g m/s), mu %g, %d %s, %.1f s wall\n",
               h, lo.transient, lo.duration, static_cast<long long>(lo.renormalise_every), lo.renormalise_every * h,
-              lo.separation, b, std::sqrt(2.0 * c.load.initial_mean * b), c.friction_coefficient, n,
-              scan ? "values" : "phases", wall);
-  std::printf("largest exponent [1/s]: median %.4g, 95%% interval of the median [%.4g, %.4g], min %.4g, Q1 %.4g, Q3 %.4g, max %.4g\n",
-              bs.median, bs.median_low, bs.median_high, bs.min, bs.q1, bs.q3, bs.max);
+              lo.separation, b, std::sqrt(2.0 * c.load.initial_mean * b), c.friction_coefficient, n, runs.what.c_str(), wall);
+  print_box("largest exponent [1/s]", ex);
   std::printf("ln(d/d0) per renormalisation interval: min %.3g, max %.3g\n", gmin, gmax);
   return 0;
+}
+
+int lyapunov(const Options& o) {
+  const gd::ModelConfig c = load_config(o, 0);
+  const double h = c.run.time_step / o.get("step-divisor", 1);
+  const LyapunovRuns runs = lyapunov_runs(o, c);
+  const std::string method = o.str("method", "tangent");
+  if (method == "tangent") return lyapunov_tangent(o, c, h, runs);
+  if (method == "pairs") return lyapunov_pairs(o, c, h, runs);
+  throw std::runtime_error("--method = '" + method + "' is not a method; allowed: tangent, pairs");
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -5,6 +5,7 @@
 // (std::fma).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -41,6 +42,7 @@ struct State {
 struct Plain {
   double d, v;
   double d_scale = 0.0, v_scale = 0.0;
+  bool near_boundary = false;  // a segment's stages may have met |d| = b: the kernel locates it instead
 };
 
 Plain plain_step(const gd::StepPlan& plan, double h, const gd::GearPair& g, const State& s) {
@@ -63,6 +65,7 @@ Plain plain_step(const gd::StepPlan& plan, double h, const gd::GearPair& g, cons
     };
     double& d = r.d;
     double& v = r.v;
+    const double d0 = d, v0 = v;
     const double a1 = acc(d, v, la, qa);
     const double v2 = v + half * a1;
     const double a2 = acc(d + half * v, v2, lm, qm);
@@ -70,8 +73,13 @@ Plain plain_step(const gd::StepPlan& plan, double h, const gd::GearPair& g, cons
     const double a3 = acc(d + half * v2, v3, lm, qm);
     const double v4 = v + H * a3;
     const double a4 = acc(d + H * v3, v4, lb, qb);
+    const double x[3] = {d0 + half * v0, d0 + half * v2, d0 + H * v3};
     d += (H / 6.0) * (v + 2.0 * v2 + 2.0 * v3 + v4);
     v += (H / 6.0) * (a1 + 2.0 * a2 + 2.0 * a3 + a4);
+    // The band of doc/model.md §5 (with a little slack for the plain roundings).
+    const double reach = 0.26 * H * (std::fabs(v0) + std::fabs(v));
+    const double lo = std::min({d0, x[0], x[1], x[2], d}) - reach, hi = std::max({d0, x[0], x[1], x[2], d}) + reach;
+    r.near_boundary = r.near_boundary || (lo <= b && hi >= b) || (lo <= -b && hi >= -b);
   }
   r.d_scale = std::max(std::fabs(s.d), std::fabs(r.d)) + h * v_max;
   r.v_scale = std::max(std::fabs(s.v), std::fabs(r.v)) + h * term_max;
@@ -123,6 +131,8 @@ std::vector<State> some_states(const gd::GearPair& g, int count) {
 // a few eps of d (its last sum) and of v plus H times the stages' force terms (of which d's own
 // rounding in a stage argument is the largest in contact: q K ulp(d)). 4 eps of those scales
 // (measured: at most about 1.5) fails for any fusion of the wrong operands, which errs at order 1.
+// Steps that may meet a backlash boundary go through the located segment instead (test_analytic's
+// order checks); they are left out here.
 TEST(RK4Kernel, FusedStepAgreesWithPlainEvaluation) {
   double h = 0.0;
   const gd::GearPair g = shipped_gear(&h);
@@ -134,6 +144,7 @@ TEST(RK4Kernel, FusedStepAgreesWithPlainEvaluation) {
       double d = s.d, v = s.v;
       kernel::rk4_step<double>(plan, h, g.in.backlash, g.damping_coefficient, g.q3, s.mu, s.load0, s.load1, d, v);
       const Plain p = plain_step(plan, h, g, s);
+      if (p.near_boundary) continue;
       const double err_d = std::fabs(d - p.d) / (eps * p.d_scale), err_v = std::fabs(v - p.v) / (eps * p.v_scale);
       worst_d = std::max(worst_d, err_d);
       worst_v = std::max(worst_v, err_v);

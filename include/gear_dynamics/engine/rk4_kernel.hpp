@@ -10,11 +10,14 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <tuple>
 #include <type_traits>
+#include <utility>
 #if defined(__AVX512F__) || defined(__FMA__)
 #include <immintrin.h>
 #endif
 
+#include "gear_dynamics/engine/located_segment.hpp"
 #include "gear_dynamics/model/mesh_schedule.hpp"
 
 // The kernel is inlined into each stepping loop (GCC otherwise calls the packet version once per
@@ -123,26 +126,81 @@ GD_KERNEL_INLINE P load_next(const P& load0, const P& drift, const P& sigma, con
   return fused_mul_add(P(sigma * sqrt_h), z, fused_mul_add(drift, h, load0));
 }
 
-// One classical RK4 step of length H with K and b constant, Q at the three stage times (qa, qm,
-// qb) and the load linear from la to lb.
+inline double minimum(double a, double b) { return std::min(a, b); }
+template <int N>
+inline Lanes<N> minimum(const Lanes<N>& a, const Lanes<N>& b) {
+  return a.min(b);
+}
+inline double maximum(double a, double b) { return std::max(a, b); }
+template <int N>
+inline Lanes<N> maximum(const Lanes<N>& a, const Lanes<N>& b) {
+  return a.max(b);
+}
+
+// <= 0 where a lane's step may have met |delta| = b: the band from the lowest to the highest of its
+// stage deflections and end, widened by the most a cubic Hermite with the end slopes can overshoot
+// its end values (4/27 (|m0| + |m1|), taken as 1/4), contains b or -b. Elsewhere every stage saw one
+// smooth branch and the dense output stays on it, so the step is the located step, bit for bit.
+template <class P, class S>
+GD_KERNEL_INLINE P boundary_proximity(double H, const S& b, const P& d0, const P& x2, const P& x3, const P& x4,
+                                      const P& d1, const P& v0, const P& v1) {
+  const P reach = (0.25 * H) * P(magnitude(v0) + magnitude(v1));
+  const P lo = P(minimum(minimum(minimum(d0, x2), minimum(x3, x4)), d1) - reach);
+  const P hi = P(maximum(maximum(maximum(d0, x2), maximum(x3, x4)), d1) + reach);
+  return minimum(P((lo - b) * (hi - b)), P((lo + b) * (hi + b)));
+}
+
+// One RK4 step of length H with K and b constant, Q at the three stage times (qa, qm, qb) and the
+// load linear from la to lb, with the backlash crossings located (located_segment.hpp). Every lane
+// first takes the plain step; lanes that may have met a boundary are redone by the located
+// segment, one by one (a few in a thousand lane-steps).
 template <class P, class S>
 GD_KERNEL_INLINE void rk4_segment(double H, const S& K, const S& b, const S& alpha, const P& qa, const P& qm,
                                   const P& qb, const P& la, const P& lb, P& d, P& v) {
+  const P d0 = d, v0 = v;
   const double half = 0.5 * H;
   const P lm = 0.5 * (la + lb);
   const P a1 = acceleration<P, S>(d, v, la, K, qa, b, alpha);
   const P v2 = fused_mul_add(half, a1, v);
-  const P a2 = acceleration<P, S>(fused_mul_add(half, v, d), v2, lm, K, qm, b, alpha);
+  const P x2 = fused_mul_add(half, v, d);
+  const P a2 = acceleration<P, S>(x2, v2, lm, K, qm, b, alpha);
   const P v3 = fused_mul_add(half, a2, v);
-  const P a3 = acceleration<P, S>(fused_mul_add(half, v2, d), v3, lm, K, qm, b, alpha);
+  const P x3 = fused_mul_add(half, v2, d);
+  const P a3 = acceleration<P, S>(x3, v3, lm, K, qm, b, alpha);
   const P v4 = fused_mul_add(H, a3, v);
-  const P a4 = acceleration<P, S>(fused_mul_add(H, v3, d), v4, lb, K, qb, b, alpha);
+  const P x4 = fused_mul_add(H, v3, d);
+  const P a4 = acceleration<P, S>(x4, v4, lb, K, qb, b, alpha);
   // x + (H/6)(y1 + 2 y2 + 2 y3 + y4), summed left to right; 2 y is exact, so only the last
   // product's fusion changes a rounding.
   const P dv = fused_mul_add(2.0, v3, P(fused_mul_add(2.0, v2, v))) + v4;
   const P da = fused_mul_add(2.0, a3, P(fused_mul_add(2.0, a2, a1))) + a4;
   d = fused_mul_add(H / 6.0, dv, d);
   v = fused_mul_add(H / 6.0, da, v);
+
+  const P near = boundary_proximity<P, S>(H, b, d0, x2, x3, x4, d, v0, v);
+  const auto locate = [&](int i) {
+    const SegmentInputs in{H,
+                           detail::lane(K, i),
+                           detail::lane(b, i),
+                           detail::lane(alpha, i),
+                           detail::lane(qa, i),
+                           detail::lane(qm, i),
+                           detail::lane(qb, i),
+                           detail::lane(la, i),
+                           detail::lane(lb, i)};
+    double di = detail::lane(d0, i), vi = detail::lane(v0, i);
+    NoTangent none;
+    located_segment(in, di, vi, none);
+    return std::pair<double, double>(di, vi);
+  };
+  if constexpr (std::is_same_v<P, double>) {
+    if (near <= 0.0) std::tie(d, v) = locate(0);
+  } else {
+    if (near.minCoeff() <= 0.0) {
+      for (int i = 0; i < P::RowsAtCompileTime; ++i)
+        if (near[i] <= 0.0) std::tie(d[i], v[i]) = locate(i);
+    }
+  }
 }
 
 // One grid step of (d, v) by RK4 over the plan's segments (split at the stiffness switches), the
@@ -157,6 +215,36 @@ GD_KERNEL_INLINE void rk4_step(const StepPlan& plan, double h, double b, double 
     rk4_segment<P, double>((seg.end - seg.begin) * h, seg.stiffness, b, alpha, fused_mul_add(mu, seg.friction_start, q3),
                            fused_mul_add(mu, seg.friction_mid, q3), fused_mul_add(mu, seg.friction_end, q3), la, lb,
                            d, v);
+  }
+}
+
+// rk4_step for one lane with its tangent vectors (the Lyapunov spectrum): the variational equation
+// is carried through the same sub-steps, and (d, v) come out bit for bit as rk4_step's. A step that
+// stays on its branch is the branch step (its stages decide the located path exactly as
+// rk4_segment's do: both sets of stages agree until one leaves the branch, and then both bands
+// contain a boundary).
+inline void rk4_step_tangent(const StepPlan& plan, double h, double b, double alpha, double q3, double mu,
+                             double load0, double load1, double& d, double& v, Tangent& tangent) {
+  for (int s = 0; s < plan.segments; ++s) {
+    const StepSegment& seg = plan.segment[s];
+    const double H = (seg.end - seg.begin) * h;
+    const SegmentInputs in{H,
+                           seg.stiffness,
+                           b,
+                           alpha,
+                           fused_mul_add(mu, seg.friction_start, q3),
+                           fused_mul_add(mu, seg.friction_mid, q3),
+                           fused_mul_add(mu, seg.friction_end, q3),
+                           seg.begin == 0.0 ? load0 : fused_mul_add(seg.begin, load1 - load0, load0),
+                           seg.end == 1.0 ? load1 : fused_mul_add(seg.end, load1 - load0, load0)};
+    double d1 = d, v1 = v, x[3];
+    Tangent t1 = tangent;
+    located::branch_rk4(branch_of(d, b), H, in.K, b, alpha, in.qa, in.qm, in.qb, in.la, in.lb, d1, v1, t1, x);
+    if (boundary_proximity<double, double>(H, b, d, x[0], x[1], x[2], d1, v, v1) <= 0.0) {
+      located_segment(in, d, v, tangent);
+    } else {
+      d = d1, v = v1, tangent = t1;
+    }
   }
 }
 
