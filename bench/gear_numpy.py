@@ -1,8 +1,9 @@
 #!/usr/bin/python3
-"""The gear model (doc/model.md §2) and its integrator (§5: RK4, h = 1 us, stiffness switches split out)
-in vectorised numpy, written as a competent Python user would: one array element per realization,
-a Python loop over time steps, the mesh timing precomputed for all steps at once, normals drawn in
-chunks. Run by bench/run; see --help."""
+"""The gear model (doc/model.md §2) and its integrator (§5: RK4, stiffness switches split out,
+backlash crossings located) in vectorised numpy, written as a competent Python user would: one
+array element per realization, a Python loop over time steps, the mesh timing precomputed for all
+steps at once, normals drawn in chunks; the few lanes near a flank redone one by one in Python.
+Run by bench/run; see --help."""
 import argparse
 import json
 import time
@@ -44,7 +45,89 @@ class Gear:
         split = np.nonzero((nxt > a0 + tol) & (nxt < a1 - tol))[0]
         return K, f, {int(i): (a0[i], nxt[i], a1[i]) for i in split}
 
+    def branch_step(self, s, d, v, H, la, lb, K, qa, qm, qb):
+        """One RK4 step on contact branch s (-1, 0, +1), its force law continued past the flank;
+        returns the end state."""
+        b, alpha = self.backlash, self.damping_coefficient
+
+        def acc(x, y, load, q):
+            if s == 0:
+                return load
+            g = x - s * b
+            return load - q * (K * g + alpha * s * g * y)
+        lm = 0.5 * (la + lb)
+        a1 = acc(d, v, la, qa)
+        v2 = v + 0.5 * H * a1
+        a2 = acc(d + 0.5 * H * v, v2, lm, qm)
+        v3 = v + 0.5 * H * a2
+        a3 = acc(d + 0.5 * H * v2, v3, lm, qm)
+        v4 = v + H * a3
+        a4 = acc(d + H * v3, v4, lb, qb)
+        return (d + H / 6 * (v + 2 * v2 + 2 * v3 + v4), v + H / 6 * (a1 + 2 * a2 + 2 * a3 + a4))
+
+    def located(self, d, v, H, la, lb, K, qa, qm, qb):
+        """One lane's segment with every crossing of |delta| = b located (doc/model.md §5): the
+        first flank the step's cubic Hermite reaches (np.roots), the crossing refined by bisection
+        of the RK4 step length, and a restart on the branch beyond."""
+        b = self.backlash
+        s = (d > b) - (d < -b)
+        u0 = 0.0
+        lin = lambda a, c, u: a + u * (c - a)
+        for _ in range(17):
+            rest = 1.0 - u0
+
+            def step(w):
+                u1 = u0 + w * rest
+                qmid = qm if (u0 == 0.0 and w == 1.0) else lin(qa, qb, 0.5 * (u0 + u1))
+                return self.branch_step(s, d, v, w * rest * H, lin(la, lb, u0), lin(la, lb, u1), K,
+                                        lin(qa, qb, u0), qmid, lin(qa, qb, u1))
+            d1, v1 = step(1.0)
+            m0, m1 = rest * H * v, rest * H * v1
+            cubic = [2 * (d - d1) + m0 + m1, 3 * (d1 - d) - 2 * m0 - m1, m0, d]
+            flanks = [(b, 1.0, 0)] if s > 0 else [(-b, -1.0, 0)] if s < 0 else [(b, -1.0, 1), (-b, 1.0, -1)]
+            first = None
+            for level, side, beyond in flanks:
+                shifted = cubic[:3] + [d - level]
+                for r in sorted(r.real for r in np.roots(shifted) if abs(r.imag) < 1e-12 and 0 < r.real <= 1):
+                    if side * np.polyval(shifted, min(1.0, r + 1e-7)) < 0:  # leaves the branch there
+                        if first is None or r < first[0]:
+                            first = (r, level, side, beyond)
+                        break
+            if first is None:
+                return d1, v1
+            w, level, side, beyond = first
+            outside = lambda x: side * (step(x)[0] - level) < 0
+            hi = min(1.0, w + 1e-6)
+            if not outside(hi):
+                if not outside(1.0):
+                    return d1, v1  # the RK4 step itself stays on the branch
+                hi = 1.0
+            lo = max(0.0, w - 1e-6)
+            if outside(lo):
+                lo = 0.0
+            for _ in range(64):
+                mid = 0.5 * (lo + hi)
+                lo, hi = (lo, mid) if outside(mid) else (mid, hi)
+            d, v = level, step(hi)[1]
+            s, u0 = beyond, u0 + hi * rest
+            if u0 >= 1.0:
+                return d, v
+        return step(1.0)
+
     def rk4(self, d, v, H, la, lb, K, qa, qm, qb):
+        d1, v1 = self.plain_rk4(d, v, H, la, lb, K, qa, qm, qb)
+        # Lanes whose stages may have met a flank (their band, widened by the Hermite bound).
+        reach = 0.25 * H * (np.abs(v) + np.abs(v1))
+        x = (d, d + 0.5 * H * v, d1)
+        lo, hi = np.minimum.reduce(x) - reach - H * np.abs(v), np.maximum.reduce(x) + reach + H * np.abs(v)
+        b = self.backlash
+        near = np.nonzero(((lo <= b) & (hi >= b)) | ((lo <= -b) & (hi >= -b)))[0]
+        for i in near:
+            pick = lambda a: a[i] if np.ndim(a) else a
+            d1[i], v1[i] = self.located(float(d[i]), float(v[i]), H, pick(la), pick(lb), K, qa, qm, qb)
+        return d1, v1
+
+    def plain_rk4(self, d, v, H, la, lb, K, qa, qm, qb):
         lm = 0.5 * (la + lb)
         a1 = self.acceleration(d, v, la, K, qa)
         v2 = v + 0.5 * H * a1

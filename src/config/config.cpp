@@ -90,7 +90,7 @@ void validate_consistency(const ModelConfig& c) {
       e << "run.time_step = " << h << " s is too large for the stiffest contact: omega_max h = " << wh
         << " with omega_max = " << wh / h << " rad/s at mu = " << kMaxFrictionCoefficient
         << "; RK4 needs omega_max h < " << kMaxOmegaTimesStep << " (stability), i.e. time_step < "
-        << kMaxOmegaTimesStep / (wh / h) << " s; doc/model.md's accuracy needs omega_max h <= 0.07";
+        << kMaxOmegaTimesStep / (wh / h) << " s; doc/model.md §5's accuracy figures hold for omega_max h <= 0.18";
       errors.push_back(e.str());
       e.str("");
     }

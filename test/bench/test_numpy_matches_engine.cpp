@@ -37,14 +37,15 @@ void expect_same_path(const gd::ModelConfig& c, double delta_scale, double veloc
                             .c_str()),
             0);
   const YAML::Node numpy = YAML::LoadFile(out);
-  ASSERT_EQ(numpy["check_every"].as<std::int64_t>(), 500);
+  const std::int64_t every = std::llround(0.0005 / c.run.time_step);
+  ASSERT_EQ(numpy["check_every"].as<std::int64_t>(), every);
   ASSERT_EQ(numpy["check_delta"].size(), 21u);
 
   gd::Ensemble e(gd::derive(c.gear), c.run.time_step, c.initial,
                  {gd::deterministic_lane(c, c.friction_coefficient)}, c.seed);
   const double b = c.gear.backlash;
   for (std::size_t k = 0; k < numpy["check_delta"].size(); ++k) {
-    while (e.step_index() < static_cast<std::int64_t>(k) * 500) e.step();
+    while (e.step_index() < static_cast<std::int64_t>(k) * every) e.step();
     EXPECT_NEAR(numpy["check_delta"][k].as<double>() - b, e.delta()[0] - b, tolerance * delta_scale)
         << "t = " << e.time();
     EXPECT_NEAR(numpy["check_velocity"][k].as<double>(), e.velocity()[0], tolerance * velocity_scale)

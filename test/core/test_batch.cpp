@@ -121,6 +121,8 @@ TEST(Batch, PlanNamesKindsPhasesAndRecordIntervals) {
   const auto runs = gd::plan_runs(model, s);
   ASSERT_EQ(runs.size(), 2u * (1 + 64 + 12));
   const double phi_n = gd::derive(model.gear).mesh_period_angle;
+  const std::int64_t dense_every = std::llround(1.0 / (s.record_rate * model.run.time_step)),
+                     sparse_every = std::llround(1.0 / (s.sparse_record_rate * model.run.time_step));
   std::set<std::string> names;
   for (std::size_t i = 0; i < runs.size(); ++i) {
     const gd::RunSpec& r = runs[i];
@@ -128,11 +130,11 @@ TEST(Batch, PlanNamesKindsPhasesAndRecordIntervals) {
     names.insert(r.name);
     if (r.kind == gd::RunKind::Phase) {
       EXPECT_EQ(r.mesh_phase, r.index * phi_n / 64);
-      EXPECT_EQ(r.record_every, 1000);
+      EXPECT_EQ(r.record_every, sparse_every);
     } else {
       EXPECT_EQ(r.mesh_phase, model.gear.mesh_phase);
       // S1, S2 and S3 get the dense series.
-      EXPECT_EQ(r.record_every, r.kind == gd::RunKind::S1 || r.index < 2 ? 10 : 1000) << r.name;
+      EXPECT_EQ(r.record_every, r.kind == gd::RunKind::S1 || r.index < 2 ? dense_every : sparse_every) << r.name;
     }
   }
   EXPECT_EQ(names.size(), runs.size());

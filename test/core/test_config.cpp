@@ -42,8 +42,8 @@ TEST(Config, ShippedFilesLoadWithPaperValues) {
   EXPECT_EQ(c.gear.pinion_teeth, 20);
   EXPECT_EQ(c.load.initial_mean, 20.0);
   EXPECT_EQ(c.load.sigma, 5.0);
-  EXPECT_EQ(c.run.time_step, 1e-6);
-  EXPECT_EQ(c.run.steps(), 400000);
+  EXPECT_EQ(c.run.time_step, 2.5e-6);
+  EXPECT_EQ(c.run.steps(), 160000);
   EXPECT_EQ(c.seed, 20180529u);
   EXPECT_EQ(c.run.snapshot_times.size(), 5u);
   // to_yaml round-trips.

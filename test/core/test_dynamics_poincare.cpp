@@ -111,7 +111,7 @@ TEST(GearLanes, BitIdenticalToEnsemble) {
   }
 }
 
-// At 1000 rpm the mesh period, 3 ms, is 3000 steps: the gear's section is taken on the grid, and it
+// At 1000 rpm the mesh period, 3 ms, is a whole number of steps: the gear's section is taken on the grid, and it
 // equals the Ensemble's state at those steps.
 TEST(Poincare, GearSectionOnTheGrid) {
   const gd::ModelConfig c = paper_config();
@@ -124,7 +124,7 @@ TEST(Poincare, GearSectionOnTheGrid) {
   gd::Ensemble ref(g, c.run.time_step, c.initial, {gd::deterministic_lane(c, 0.04)}, c.seed);
   for (std::size_t k = 0; k < pts.size(); ++k) {
     EXPECT_TRUE(pts[k].on_grid);
-    while (ref.step_index() < static_cast<std::int64_t>(3000 * k)) ref.step();
+    while (ref.step_index() < static_cast<std::int64_t>(k) * std::llround(gd::mesh_period(g) / c.run.time_step)) ref.step();
     EXPECT_EQ(pts[k].x[0], ref.delta()[0]);
     EXPECT_EQ(pts[k].x[1], ref.velocity()[0]);
   }

@@ -22,11 +22,14 @@ struct Loaded {
   gd::SimulatorSettings sim;
 };
 
-// The shipped config/*.yaml with `overlay` (YAML text) merged on top.
+constexpr double kH = 1e-6;  // the step these tests count in (run.time_step overridden)
+
+// The shipped config/*.yaml at step kH with `overlay` (YAML text) merged on top.
 Loaded load(const std::string& overlay) {
   const std::string dir = GEAR_DYNAMICS_CONFIG_DIR;
   YAML::Node root = gd::read_yaml_files({dir + "/gear_pair.yaml", dir + "/load.yaml", dir + "/run.yaml",
                                          dir + "/simulator.yaml"});
+  root["run"]["time_step"] = kH;
   gd::merge_yaml(root, YAML::Load(overlay));
   Loaded l;
   l.model = gd::parse_config(root);
@@ -56,7 +59,6 @@ struct FakeClock : gd::LiveClock {
 };
 
 using Request = gd::LiveSimulation::Request;
-constexpr double kH = 1e-6;  // the shipped run.time_step
 
 // Runs iterate() until the simulation stops running or `max` iterations.
 void run_until_stopped(gd::LiveSimulation& sim, int max = 100000) {

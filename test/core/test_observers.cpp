@@ -132,6 +132,7 @@ TEST(Simulate, ObserversAgreeWithTheFullPath) {
     lanes[i].realization = i;
   }
   gd::RunSettings run;
+  run.time_step = 1e-6;
   run.duration = 0.02;
   run.window = 0.005;
   run.snapshot_times = {0.01, 0.017, 0.02};

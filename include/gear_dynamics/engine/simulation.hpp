@@ -12,7 +12,7 @@
 namespace gear_dynamics {
 
 struct RunSettings {
-  double time_step = 1.0e-6;   // h [s]
+  double time_step = 2.5e-6;   // h [s]
   double duration = 0.4;       // T [s]
   double window = 0.05;        // analysis window W, ending at T [s]
   std::vector<double> snapshot_times{0.30, 0.33, 0.35, 0.36, 0.40};  // grid times [s]
