@@ -127,7 +127,8 @@ TEST(BatchBags, OneLz4BagPerRunWithRunInfoFirstSeriesAndSummaryLast) {
       section.push_back(p->t);
     }
     const std::vector<double> expected_section =
-        r.kind == gd::RunKind::S1 ? std::vector<double>{0.0, 3000 * model.run.time_step} : std::vector<double>{};
+        r.kind == gd::RunKind::S1 ? std::vector<double>{0.0, std::llround(0.003 / model.run.time_step) * model.run.time_step}
+                                   : std::vector<double>{};
     EXPECT_EQ(section, expected_section) << r.name;
     EXPECT_EQ(topics.front(), gd::kRunInfoTopic) << r.name;
     EXPECT_EQ(topics.back(), gd::kSummaryTopic) << r.name;
@@ -291,13 +292,15 @@ TEST(BatchBags, AbandonedRunsStayActive) {
   struct Stopper : gd::BagSink {
     using gd::BagSink::BagSink;
     gd::BatchControl* control = nullptr;
+    double model_duration = 0.0;
     void recorded(const std::vector<gd::RunSpec>& b, const gd::Ensemble& e, const Eigen::ArrayXd& d) override {
       gd::BagSink::recorded(b, e, d);
-      if (b.front().name == "mu0.0400_r00000" && e.step_index() >= 2000) control->stop = true;
+      if (b.front().name == "mu0.0400_r00000" && e.time() >= 0.5 * model_duration) control->stop = true;
     }
   } sink(model, s.output_dir);
   gd::BatchControl control;
   sink.control = &control;
+  sink.model_duration = model.run.duration;
   gd::run_batch(model, runs, s, sink, control);
   sink.finish();
   std::size_t active = 0, done = 0;
