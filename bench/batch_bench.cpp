@@ -39,8 +39,9 @@ int main() try {
   gd::run_batch(model, runs, settings, sink, control);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::printf("default batch stepped alone (no bags): %zu runs, %.3g realization-steps in %.2f s wall on %d "
-              "threads, %d lanes per block (%.3g realization-steps/s)\n",
-              runs.size(), steps, wall, gd::batch_threads(settings), settings.block_lanes, steps / wall);
+              "threads, %d lanes per block (%.3g realization-steps/s), h = %g s\n",
+              runs.size(), steps, wall, gd::batch_threads(settings), settings.block_lanes, steps / wall,
+              model.run.time_step);
   return sink.checksum == sink.checksum ? 0 : 1;  // NaN would mean a broken run
 } catch (const std::exception& e) {
   std::fprintf(stderr, "gear_batch_bench: %s\n", e.what());

@@ -10,6 +10,7 @@ For a bifurcation diagram, --lyapunov adds the exponent along the same parameter
 """
 import argparse
 import csv
+import os
 import sys
 
 import matplotlib
@@ -142,7 +143,8 @@ def lyapunov(prefix, _args):
     res = read(prefix + "_lyapunov.csv")
     run = read(prefix + "_lyapunov_running.csv")
     key = list(res[0].keys())[0]
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    windows = read(prefix + "_lyapunov_windows.csv") if os.path.exists(prefix + "_lyapunov_windows.csv") else None
+    fig, axes = plt.subplots(1, 3 if windows else 2, figsize=(16 if windows else 11, 4.2))
     ids = col(run, "id", int)
     t = col(run, "t")
     r = col(run, "running")
@@ -160,6 +162,18 @@ def lyapunov(prefix, _args):
     axes[1].axhline(0, color="grey", lw=0.5)
     axes[1].set_xlabel("initial mesh phase $\\varphi_0$ [rad]" if key == "phase0" else key)
     axes[1].set_ylabel("largest Lyapunov exponent [1/s]")
+    if windows:  # the tangent method: lambda1 per window, median and quartiles over the runs
+        start, end, l1 = col(windows, "start"), col(windows, "end"), col(windows, "exponent")
+        for a, b in sorted(set(zip(start.tolist(), end.tolist()))):
+            x = l1[(start == a) & (end == b)]
+            q1, med, q3 = np.percentile(x, [25, 50, 75])
+            axes[2].plot([a, b], [med, med], color="C0", lw=2)
+            axes[2].fill_between([a, b], [q1, q1], [q3, q3], color="C0", alpha=0.2, lw=0)
+        axes[2].axhline(0, color="grey", lw=0.5)
+        axes[2].set_xscale("symlog", linthresh=0.1)
+        axes[2].set_xlabel("window [s]")
+        axes[2].set_ylabel("$\\lambda_1$ over the window [1/s]")
+        axes[2].set_title("per window: median, quartiles over the runs", fontsize=9)
     save(fig, prefix, "lyapunov")
 
 

@@ -60,13 +60,11 @@ LyapunovSpectrum lyapunov_spectrum(const GearLaneSpec& lane, double h, const Spe
   t.xi[0] = scale[0], t.eta[1] = scale[1];  // unit vectors of the scaled state
   double d = lane.initial.deflection, v = lane.initial.velocity;
   double sum[2] = {0, 0};
-  // Sums at each window edge reached: exponents and the trace integral.
-  std::vector<double> at_edge[3];
   LyapunovSpectrum out;
   std::int64_t since = 0, counted = 0;
   std::size_t next_edge = 0;
   while (next_edge < edges.size() && edges[next_edge] == 0) {
-    for (auto& a : at_edge) a.push_back(0.0);
+    out.edges.push_back(SpectrumEdge{});
     ++next_edge;
   }
   for (std::int64_t n = 0; n < n_end; ++n) {
@@ -87,9 +85,7 @@ LyapunovSpectrum lyapunov_spectrum(const GearLaneSpec& lane, double h, const Spe
       }
     }
     if (edge) {
-      at_edge[0].push_back(sum[0]);
-      at_edge[1].push_back(sum[1]);
-      at_edge[2].push_back(t.trace_integral);
+      out.edges.push_back(SpectrumEdge{(n + 1) * h, {sum[0], sum[1]}, t.trace_integral});
       ++next_edge;
     }
   }
@@ -97,17 +93,19 @@ LyapunovSpectrum lyapunov_spectrum(const GearLaneSpec& lane, double h, const Spe
   out.exponent[0] = sum[0] / T;
   out.exponent[1] = sum[1] / T;
   out.trace = t.trace_integral / T;
-  for (std::size_t k = 1; k < edges.size(); ++k) {
-    SpectrumWindow w;
-    w.start = edges[k - 1] * h;
-    w.end = edges[k] * h;
-    const double len = w.end - w.start;
-    w.exponent[0] = (at_edge[0][k] - at_edge[0][k - 1]) / len;
-    w.exponent[1] = (at_edge[1][k] - at_edge[1][k - 1]) / len;
-    w.trace = (at_edge[2][k] - at_edge[2][k - 1]) / len;
-    out.windows.push_back(w);
-  }
+  for (std::size_t k = 1; k < out.edges.size(); ++k) out.windows.push_back(window_between(out.edges[k - 1], out.edges[k]));
   return out;
+}
+
+SpectrumWindow window_between(const SpectrumEdge& from, const SpectrumEdge& to) {
+  SpectrumWindow w;
+  w.start = from.time;
+  w.end = to.time;
+  const double len = w.end - w.start;
+  w.exponent[0] = (to.log_r[0] - from.log_r[0]) / len;
+  w.exponent[1] = (to.log_r[1] - from.log_r[1]) / len;
+  w.trace = (to.trace_integral - from.trace_integral) / len;
+  return w;
 }
 
 std::vector<LyapunovResult> largest_lyapunov(LaneSystem& sys, const LyapunovOptions& o) {

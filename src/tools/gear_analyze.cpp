@@ -424,9 +424,12 @@ int lyapunov_tangent(const Options& o, const gd::ModelConfig& c, double h, const
   });
   const double wall = since(t0);
   const auto main_window = [&](const gd::LyapunovSpectrum& r) {
-    for (const auto& w : r.windows)
-      if (std::fabs(w.start - transient) < 1e-12 && std::fabs(w.end - so.duration) < 1e-12) return w;
-    return gd::SpectrumWindow{};
+    const auto at = [&](double t) {
+      for (const auto& e : r.edges)
+        if (std::fabs(e.time - t) < 1e-9) return e;
+      throw std::logic_error("lyapunov: no window edge at " + std::to_string(t) + " s");
+    };
+    return gd::window_between(at(transient), at(so.duration));
   };
   std::ofstream f = open_csv(o, "lyapunov");
   f << runs.column << ",exponent,exponent2,trace,liouville_error\n";

@@ -30,12 +30,21 @@ struct SpectrumWindow {
   double trace = 0;              // time average of the Jacobian's trace over the window [1/s]
 };
 
+// The sums at a window edge: ln r11, ln r22 and the trace's integral, accumulated from t = 0.
+struct SpectrumEdge {
+  double time = 0, log_r[2] = {0, 0}, trace_integral = 0;
+};
+
 struct LyapunovSpectrum {
   double exponent[2] = {0, 0};  // over [0, duration] [1/s]
   double trace = 0;             // time average of tr J over [0, duration] [1/s] (= lambda1 + lambda2)
-  std::vector<SpectrumWindow> windows;
-  std::vector<double> time, running;  // running estimate of lambda1 over [0, t]
+  std::vector<SpectrumEdge> edges;
+  std::vector<SpectrumWindow> windows;  // between consecutive edges
+  std::vector<double> time, running;    // running estimate of lambda1 over [0, t]
 };
+
+// The exponents over [from.time, to.time] from the sums at two edges.
+SpectrumWindow window_between(const SpectrumEdge& from, const SpectrumEdge& to);
 
 // One spectrum per lane: each lane a deterministic gear with its own gear inputs, mu, constant load
 // and initial state, stepped with the production kernel at `time_step`.
