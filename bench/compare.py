@@ -139,8 +139,9 @@ def report(args, results, load_before, ratios):
     reference = results[0][2]
     rate_ref = steps_per_second(reference)
     cpus = os.cpu_count()
+    h_us = 1e6 * args.duration / reference['steps']
     print(f"\nworkload: {args.realizations} realizations x {args.duration} s = "
-          f"{args.realizations * reference['steps']:.3g} realization-steps of h = 1 us, mu and load "
+          f"{args.realizations * reference['steps']:.3g} realization-steps of h = {h_us:.3g} us, mu and load "
           f"from config/, engine blocks of {args.block} lanes; {cpus} CPUs, load average "
           f"{load_before:.2f} before, {os.getloadavg()[0]:.2f} after")
     if load_before > 0.25 * cpus:

@@ -1,9 +1,11 @@
 #include "scalar_loop.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <stdexcept>
 
+#include "gear_dynamics/engine/located_segment.hpp"
 #include "gear_dynamics/engine/normal_stream.hpp"
 
 namespace gear_bench {
@@ -25,9 +27,11 @@ double ScalarModel::acceleration(double d, double v, double load, double K, doub
   return load - Q * (K * g + alpha_ * std::fabs(g) * v);
 }
 
-// Classical RK4 over H with the load linear from la to lb.
+// Classical RK4 over H with the load linear from la to lb; a step that may have met |d| = b (its
+// stages' band, doc/model.md §5) is redone by the kernel's located segment.
 void ScalarModel::rk4(double H, double la, double lb, double K, double qa, double qm, double qb,
                       double& d, double& v) const {
+  const double d0 = d, v0 = v;
   const double lm = 0.5 * (la + lb);
   const double a1 = acceleration(d, v, la, K, qa);
   const double v2 = v + 0.5 * H * a1;
@@ -38,6 +42,14 @@ void ScalarModel::rk4(double H, double la, double lb, double K, double qa, doubl
   const double a4 = acceleration(d + H * v3, v4, lb, K, qb);
   d += H / 6.0 * (v + 2.0 * v2 + 2.0 * v3 + v4);
   v += H / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4);
+  const double reach = 0.25 * H * (std::fabs(v0) + std::fabs(v));
+  const double lo = std::min({d0, d0 + 0.5 * H * v0, d0 + 0.5 * H * v2, d0 + H * v3, d}) - reach;
+  const double hi = std::max({d0, d0 + 0.5 * H * v0, d0 + 0.5 * H * v2, d0 + H * v3, d}) + reach;
+  if ((lo <= b_ && hi >= b_) || (lo <= -b_ && hi >= -b_)) {
+    d = d0, v = v0;
+    gear_dynamics::kernel::NoTangent none;
+    gear_dynamics::kernel::located_segment({H, K, b_, alpha_, qa, qm, qb, la, lb}, d, v, none);
+  }
 }
 
 void ScalarModel::step(std::int64_t n, double mu, double load0, double load1, double& d,

@@ -52,9 +52,18 @@ std::vector<PoincarePoint> poincare_section(LaneSystem& sys, const PoincareOptio
       if (grid) { p.x[c] = x1; continue; }
       const double x0 = prev[l * dim + c];
       const int dc = sys.derivative_of(c);
-      // Cubic Hermite on [t_n, t_n + h] with slopes from the derivative component, else linear: the
-      // batch's PoincareSampler (engine/observers.hpp) calls the same two functions.
-      p.x[c] = dc < 0 ? linear_in_step(x0, x1, s) : hermite_in_step(x0, prev[l * dim + dc], x1, sys.state(l, dc), s, h);
+      // Cubic Hermite on [t_n, t_n + h] with slopes from the derivative component; a derivative
+      // component takes that cubic's slope; any other, a straight line: the batch's
+      // PoincareSampler (engine/observers.hpp) calls the same functions.
+      int integral = -1;
+      for (int q = 0; q < dim; ++q)
+        if (sys.derivative_of(q) == c) integral = q;
+      if (dc >= 0)
+        p.x[c] = hermite_in_step(x0, prev[l * dim + dc], x1, sys.state(l, dc), s, h);
+      else if (integral >= 0)
+        p.x[c] = hermite_slope_in_step(prev[l * dim + integral], x0, sys.state(l, integral), x1, s, h);
+      else
+        p.x[c] = linear_in_step(x0, x1, s);
     }
     out.push_back(std::move(p));
     ++ls[l].k;

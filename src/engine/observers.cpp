@@ -155,6 +155,11 @@ double hermite_in_step(double x0, double v0, double x1, double v1, double s, dou
   return (2 * s3 - 3 * s2 + 1) * x0 + (s3 - 2 * s2 + s) * h * v0 + (-2 * s3 + 3 * s2) * x1 + (s3 - s2) * h * v1;
 }
 
+double hermite_slope_in_step(double x0, double v0, double x1, double v1, double s, double h) {
+  const double s2 = s * s;
+  return ((6 * s2 - 6 * s) * (x0 - x1)) / h + (3 * s2 - 4 * s + 1) * v0 + (3 * s2 - 2 * s) * v1;
+}
+
 double linear_in_step(double x0, double x1, double s) { return x0 + s * (x1 - x0); }
 
 PoincareSampler::PoincareSampler(int lanes, double time_step, double period, double offset, double end)
@@ -177,7 +182,7 @@ void PoincareSampler::emit(double t, const Eigen::Ref<const Eigen::ArrayXd>& del
     SectionPoint p{t, delta[l], velocity[l]};
     if (!grid) {
       p.delta = hermite_in_step(delta_prev_[l], velocity_prev_[l], delta[l], velocity[l], s, h_);
-      p.delta_dot = linear_in_step(velocity_prev_[l], velocity[l], s);
+      p.delta_dot = hermite_slope_in_step(delta_prev_[l], velocity_prev_[l], delta[l], velocity[l], s, h_);
     }
     points_[static_cast<std::size_t>(l)].push_back(p);
   }

@@ -13,7 +13,8 @@ namespace gear_dynamics {
 // Sample times t_k = offset + k period, k = 0, 1, ..., kept when start <= t_k <= end.
 // If period and offset are whole numbers of steps (to 1e-9 of a step) the samples are grid states,
 // exactly; otherwise each sample is interpolated within its step: cubic Hermite for a component
-// with a derivative component (delta, with slopes delta_dot), linear for the others.
+// with a derivative component (delta, with slopes delta_dot), that cubic's slope for the derivative
+// component (delta_dot), linear for the others.
 struct PoincareOptions {
   double period = 0;  // [s]
   double offset = 0;  // [s]
