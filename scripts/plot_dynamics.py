@@ -171,6 +171,7 @@ def lyapunov(prefix, _args):
             axes[2].fill_between([a, b], [q1, q1], [q3, q3], color="C0", alpha=0.2, lw=0)
         axes[2].axhline(0, color="grey", lw=0.5)
         axes[2].set_xscale("symlog", linthresh=0.1)
+        axes[2].set_xlim(left=0)
         axes[2].set_xlabel("window [s]")
         axes[2].set_ylabel("$\\lambda_1$ over the window [1/s]")
         axes[2].set_title("per window: median, quartiles over the runs", fontsize=9)
