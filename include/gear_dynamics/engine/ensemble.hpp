@@ -20,7 +20,7 @@ namespace gear_dynamics {
 
 // Generation of the engine's numbers: raised whenever a change alters any run's results (1: Box-Muller
 // normals, unfused RK4; 2: Boost's ziggurat normals, fused multiply-adds; 3: backlash crossings
-// located, h = 2 us by default). A batch folder records it, so a resume never mixes bags of two
+// located, h = 2.5 us by default). A batch folder records it, so a resume never mixes bags of two
 // generations (doc/batch-folder.md).
 constexpr int kNumbersGeneration = 3;
 
