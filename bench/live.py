@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The live node's costs (issues 15 and 16), printed as one table; bench/live runs it.
+"""The live node's costs, printed as one table; bench/live runs it.
 
 1. The core (LiveSimulation, no ROS; gear_live_bench core): simulated s per CPU s at
    real_time_factor 0, publish_rate 1 kHz and 10 kHz, a sink that only counts.

@@ -29,7 +29,7 @@ GD_PACKAGES=(
 )
 
 gd_install() {
-  # One dpkg-query for all (one per package took 0.4-0.8 s); an unknown package is simply not listed.
+  # One dpkg-query for all (one per package is slow); an unknown package is simply not listed.
   local installed missing=()
   installed=$(dpkg-query -W -f='${Package} ${Status}\n' "${GD_PACKAGES[@]}" 2>/dev/null |
     sed -n 's/ install ok installed$//p' || true)
@@ -45,7 +45,7 @@ gd_install() {
   fi
 }
 
-# Whether the last build with these arguments is still current, so that catkin_make (about 3 s to
+# Whether the last build with these arguments is still current, so that catkin_make (seconds to
 # find nothing to do) can be skipped: no file of the repository (but .git, batches/ and report/,
 # the main command's outputs) is newer than that build's start, no Debian package was installed or
 # upgraded since (dpkg's status file), and the workspace's CMake cache and binary folders were not

@@ -20,7 +20,7 @@ rm -rf "$GD_WS/build/test_results"
 mkdir -p "$GD_WS/build/test_results/gear_dynamics"
 status=0
 # The fault suite's sanitizer cases build workspaces of their own, so they run here, not as a target.
-# Their builds and runs are CPU work (about 8 minutes on an AMD EPYC Zen 3 guest, 2026-12-01) while
+# Their builds and runs are CPU work (minutes; bench/README.md §7) while
 # the tests below wait on masters, launches, timers and Slurm much of the time: they run beside them
 # at the lowest priority (nice 19), taking what CPU the tests leave, and their log follows at the end.
 sanitizer_log=$(mktemp)

@@ -117,7 +117,7 @@ std::vector<std::string> write_report(const std::string& folder, const BatchInpu
   std::vector<std::string> written;
   const AnalysisSettings& s = a.settings;
   const bool paper_table4 = paper_intervals(s);
-  // Row keys: mu for the mu sweep (as before studies), else the point and its values.
+  // Row keys: mu for the mu sweep (format 1), else the point and its values.
   const std::string kh = a.key_header.empty() ? "mu" : a.key_header;
   const auto key = [&](const MuAnalysis& m) {
     return a.keys.empty() ? general(m.mu) : a.keys.at(static_cast<std::size_t>(&m - a.mu.data()));

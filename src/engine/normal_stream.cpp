@@ -143,7 +143,7 @@ inline __m256d to_double(__m256i n) {
 }
 
 // table[i] and table[i + 1] for the layer i (bits 1-7) of each of 4 words, as one 16-byte load
-// per lane, transposed (gathers were slower on the Zen 3 measured).
+// per lane, transposed (faster than a gather on the AVX2 machines of bench/README.md §1).
 inline void table_pairs(const double* table, const std::uint64_t* words, __m256d& at_layer, __m256d& next) {
   const auto pair = [&](int k) { return _mm_loadu_pd(table + (words[k] >> 1 & 0x7F)); };
   const __m256d a = _mm256_insertf128_pd(_mm256_castpd128_pd256(pair(0)), pair(2), 1);

@@ -73,7 +73,7 @@ std::string manifest_file(const BatchSettings& settings) {
 YAML::Node batch_config_yaml(const ModelConfig& model, const BatchSettings& settings) {
   YAML::Node n = to_yaml(model);
   n["monte_carlo"] = content_yaml(settings);
-  for (const SweepAxis& a : settings.sweep) {  // only a study has it: a mu sweep's config is as before
+  for (const SweepAxis& a : settings.sweep) {  // only a study has it: a mu sweep's config has no sweep key
     YAML::Node values;
     for (double v : a.values) values.push_back(v);
     values.SetStyle(YAML::EmitterStyle::Flow);

@@ -104,7 +104,7 @@ class SyntaxOnly : public YAML::EventHandler {
 
 // A manifest's text split into its top-level `runs:` block sequence, one text per item (each
 // parsed alone as `runs:` + item), and the rest with `runs:` left empty: yaml-cpp's tree of a
-// whole manifest costs about 5 kB per run (34 MB for the 6390 runs of R = 1000). False if the
+// whole manifest costs kilobytes per run (bench/README.md §8). False if the
 // text has no such block (then it is parsed whole).
 bool split_runs(const std::string& text, std::string& rest, std::vector<std::string>& items) {
   std::istringstream in(text);
@@ -407,7 +407,7 @@ using TakeBag = std::function<void(std::size_t, BagRead&)>;
 // Reads the bags in order in a child process. rosbag trusts a bag's index: a damaged offset makes
 // it read out of bounds and crash (one flipped byte in an index record is enough). In a child that
 // costs the bag, not the aggregator: a new child goes on with the next bag. One child reads many
-// bags because forks are dear here (a child per bag made reading 990 bags 7x slower). The child
+// bags because forks are dear (a child per bag made reading a batch several times slower). The child
 // sends a frame per bag: index (4 bytes), status (1: 0 contents, 1 Skip, 2 other error), payload
 // length (4) and payload (the serialized contents or the message); the parent takes each frame
 // as it arrives, so no more than one bag's frame is buffered, and hands a frame with contents to

@@ -1,5 +1,5 @@
 // bench/gear_numpy.py is an independent implementation of the same model and scheme: on a
-// deterministic run it must follow the engine path by path (the 1e-9 relative) before the
+// deterministic run it must follow the engine path by path (1e-9 relative) before the
 // chaotic separation (~0.1 s). numpy rounds every product, the engine fuses some into its sums
 // (doc/model.md §5), so the two differ by rounding from the first steps on. Two starts over 10 ms: S1 from rest (free flight, the first
 // impacts), and at rest in contact, where every stiffness switch falls inside the contact, so the
@@ -70,9 +70,9 @@ TEST(NumpyBenchmark, MatchesEngineInContactAcrossSwitches) {
   const double xs = c.load.initial_mean / (g.q3 * g.k1);
   c.initial.deflection = c.gear.backlash + xs;
   // This start amplifies rounding differences (e-folding ~0.6 ms from 4 ms on): at 10 ms a plain
-  // double evaluation of the scheme (numpy's, the engine's before its fused multiply-adds) is
+  // double evaluation of the scheme (numpy's, an unfused RK4) is
   // 1.0e-8 (delta) and 6.9e-9 (delta_dot) of these scales from the same scheme in long double, the
-  // engine's fused one 2.6e-8 and 1.8e-8, the two double ones 1.6e-8 and 1.1e-8 from each other
-  // (2026-12-01). So 1e-7 here: rounding only; a step not split at a switch errs at order 1.
+  // engine's fused one 2.6e-8 and 1.8e-8, the two double ones 1.6e-8 and 1.1e-8 from each other.
+  // So 1e-7 here: rounding only; a step not split at a switch errs at order 1.
   expect_same_path(c, xs, xs * std::sqrt(g.q3 * g.k2), 1e-7);
 }

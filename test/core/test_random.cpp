@@ -185,9 +185,9 @@ TEST(NormalStream, IsBoostsZigguratOnItsPhiloxWords) {
   // least a third of each, far beyond chance (Poisson).
   EXPECT_GT(slow.wedge, normals * 0.0270 / 3);
   EXPECT_GT(slow.tail, normals * 0.00057 / 3);
-  EXPECT_GT(slow.second_retry_counter, 100);  // 0.04 % expected (10^7 normals measured, 2026-12-01)
-  // Every branch of the SIMD wedge test and of its fallbacks to Boost: of the wedge cases (10^8
-  // words measured, 2026-12-01) 49.3 % lie below both bounds, 42.1 % above and 8.6 % between (5.5 %
+  EXPECT_GT(slow.second_retry_counter, 100);  // 0.04 % expected (counted over 10^7 normals)
+  // Every branch of the SIMD wedge test and of its fallbacks to Boost: of the wedge cases (counted over
+  // 10^8 words) 49.3 % lie below both bounds, 42.1 % above and 8.6 % between (5.5 %
   // below the curve, 3.1 % above); 1.24 % are rejected twice. At least a third of each.
   EXPECT_GT(slow.below_bounds, slow.wedge * 0.493 / 3);
   EXPECT_GT(slow.between_below_curve, slow.wedge * 0.055 / 3);

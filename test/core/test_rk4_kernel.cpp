@@ -1,6 +1,6 @@
 // The RK4 kernel's explicit fused multiply-adds (engine/rk4_kernel.hpp, doc/model.md §5): one step
 // from many states against a plain evaluation of the same formulas (every product rounded before
-// its sum, the kernel as it was before the fusion), so a fusion of the wrong operands shows; and
+// its sum, the unfused scheme), so a fusion of the wrong operands shows; and
 // the packet instantiations (8 and 16 lanes: FMA instructions) bit for bit against the scalar one
 // (std::fma).
 #include <gtest/gtest.h>

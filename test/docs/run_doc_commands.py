@@ -20,7 +20,7 @@ import xml.etree.ElementTree as ET
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 BLOCK = re.compile(r"^```(bash[^\n]*)\n(.*?)^```", re.M | re.S)
-TIMEOUT = 600  # s per block: the longest documented command is realizations:=1000 (≈ 1 min here)
+TIMEOUT = 600  # s per block: the longest documented command is realizations:=1000
 # Lines that start this very test suite again.
 SELF = {"bash scripts/test.sh", "bash .ci/run"}
 

@@ -276,8 +276,8 @@ def run(suite):
             for i in range(n):
                 signal_case(suite, reference, work, sig, i)
         # While the node starts (reads its parameters from the master, prepares the folder): a
-        # signal there interrupted a parameter read, which the node once took for a missing section
-        # (exit 2 instead of 143; 3 in 60 such tries, 2026-12-01).
+        # signal there interrupts a parameter read, which the node must not take for a missing section
+        # (exit 2 instead of 143).
         for i in range(2 * repeats):
             signal_case(suite, reference, work, (signal.SIGTERM, signal.SIGINT)[i % 2], repeats + i, 0.005, 0.05)
         for i in range(2 if suite.args.slow else 1):

@@ -142,7 +142,7 @@ TEST(StudyFolder, ReaderSkipsABagOfAnotherPoint) {
   EXPECT_EQ(in.missing[0], "p0000_mu0.0000_r00000");
 }
 
-// The mu sweep through the study path writes the folder as before studies: format 1, no points.
+// The mu sweep through the study path writes the mu sweep's folder: format 1, no points.
 TEST(StudyFolder, MuSweepKeepsFormatOne) {
   TempDir dir;
   const gd::ModelConfig model = short_model();

@@ -28,7 +28,7 @@ class AggregatorNode {
   bool wait();
   // Figures from the CSV files (scripts/plot_report.py --wait); a failure costs the figures, not the
   // report. The script is started before the wait and the reading, so that Python and matplotlib
-  // are loaded (0.4-0.9 s) by the time the CSV files are there; plot(true) lets it draw and waits
+  // are loaded by the time the CSV files are there; plot(true) lets it draw and waits
   // for it, plot(false) lets it end without drawing. Only the first call acts.
   void start_plot();
   void plot(bool draw);

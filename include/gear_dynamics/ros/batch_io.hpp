@@ -36,8 +36,8 @@ RunInfo run_info(const ModelConfig& model, const RunSpec& run);
 RunInfo run_info(const Study& study, const RunSpec& run);
 
 // run_info for the many runs of a batch: the runs of one point, mu and mesh phase (S1 and the
-// realizations) share their parameters_yaml, emitted once (yaml-cpp's emitter took about 0.3 ms a
-// run, 3 % of the default batch's CPU). Keeps a reference to the model or study. Thread-safe.
+// realizations) share their parameters_yaml, emitted once (yaml-cpp's emitter is a noticeable share of a
+// batch's CPU). Keeps a reference to the model or study. Thread-safe.
 class RunInfos {
  public:
   explicit RunInfos(const ModelConfig& model) : model_(model) {}
@@ -53,7 +53,7 @@ class RunInfos {
   std::map<std::tuple<std::size_t, double, double>, std::string> parameters_;  // by (point, mu, mesh phase)
 };
 
-// The manifest format a study writes: gear_dynamics_batch/1 for the mu sweep (as before studies),
+// The manifest format a study writes: gear_dynamics_batch/1 for the mu sweep (no points),
 // gear_dynamics_batch/2 when it has further axes (doc/batch-folder.md §3).
 const char* manifest_format(const Study& study);
 

@@ -41,7 +41,7 @@ struct RefusingConfig : SimulatorConfig {
 
 // A publisher that counts its subscribers through roscpp's connect callbacks: the stepping thread
 // asks at every publish instant, and Publisher::getNumSubscribers looks the topic up by name under a
-// lock (five lookups cost ~2 us per instant, a fifth of a core at 10 kHz).
+// lock (at 10 kHz a noticeable share of a core).
 struct CountedPublisher {
   ros::Publisher pub;
   std::string topic;  // absolute, as the bag stores it

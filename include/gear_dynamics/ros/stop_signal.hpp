@@ -18,7 +18,7 @@ void install_stop_handlers(OnSigint on_sigint);
 
 // ros::start() (the first NodeHandle) clears a shutdown request made before it: with
 // RequestShutdown, call after the first NodeHandle, so that a SIGINT that came earlier still stops
-// the node (it once ran on for ever after a SIGINT 10 ms into its start).
+// the node instead of leaving it running.
 void repeat_early_stop();
 
 int stop_signal();                // 0, or the last SIGINT or SIGTERM received
