@@ -40,7 +40,7 @@ ModelConfig with_parameter(const ModelConfig& base, ScanParameter p, double v) {
   return c;
 }
 
-int detect_period(const std::vector<PoincarePoint>& pts, int max_period, const std::vector<double>& tol) {
+int detect_period(const std::vector<SectionState>& pts, int max_period, const std::vector<double>& tol) {
   const int n = static_cast<int>(pts.size());
   for (int p = 1; p <= max_period && 2 * p <= n; ++p) {
     bool ok = true;
@@ -97,7 +97,7 @@ std::vector<ScanValue> bifurcation_scan(const ModelConfig& base, ScanParameter p
         min_delta[l] = std::min(min_delta[l], d);
       }
     };
-    std::vector<PoincarePoint> pts;
+    std::vector<SectionState> pts;
     if (shared) {
       std::vector<LaneSpec> lanes;
       for (std::size_t i = first; i < last; ++i) {
@@ -121,7 +121,7 @@ std::vector<ScanValue> bifurcation_scan(const ModelConfig& base, ScanParameter p
     for (int l = 0; l < nl; ++l) {
       ScanValue& v = out[first + l];
       v.value = values[first + l];
-      for (const PoincarePoint& p : pts)
+      for (const SectionState& p : pts)
         if (p.lane == l) {
           v.points.push_back(p);
           v.points.back().lane = 0;

@@ -7,7 +7,7 @@
 
 namespace gear_dynamics {
 
-std::vector<PoincarePoint> poincare_section(LaneSystem& sys, const PoincareOptions& o,
+std::vector<SectionState> poincare_section(LaneSystem& sys, const PoincareOptions& o,
                                             const std::function<void(const LaneSystem&)>& after_step) {
   const double h = sys.time_step();
   const int lanes = sys.lanes(), dim = sys.dimension();
@@ -37,11 +37,11 @@ std::vector<PoincarePoint> poincare_section(LaneSystem& sys, const PoincareOptio
       while (L.n0 + L.k * L.m < sys.step_index() || static_cast<double>(L.n0 + L.k * L.m) * h < o.start - 1e-9 * h) ++L.k;
     L.next = o.offset + static_cast<double>(L.k) * period[l];
   }
-  std::vector<PoincarePoint> out;
+  std::vector<SectionState> out;
   std::vector<double> prev(static_cast<std::size_t>(lanes * dim));
   std::vector<char> due(lanes, 0);
   const auto emit = [&](int l, double t, bool grid, double s) {
-    PoincarePoint p;
+    SectionState p;
     p.lane = l;
     p.k = ls[l].k;
     p.time = t;
@@ -89,7 +89,7 @@ std::vector<PoincarePoint> poincare_section(LaneSystem& sys, const PoincareOptio
       if (due[l]) emit(l, ls[l].next, false, (ls[l].next - t0) / h);
   }
   // Points in time order, lanes in order within one instant.
-  std::stable_sort(out.begin(), out.end(), [](const PoincarePoint& a, const PoincarePoint& b) {
+  std::stable_sort(out.begin(), out.end(), [](const SectionState& a, const SectionState& b) {
     return a.time < b.time || (a.time == b.time && a.lane < b.lane);
   });
   return out;

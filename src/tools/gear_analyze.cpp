@@ -283,7 +283,7 @@ int poincare(const Options& o) {
   const auto t0 = std::chrono::steady_clock::now();
   // Phase ensemble (member 0 = S1 when phi0 = 0): GearLanes, one per phase, sampled at mesh phase 0,
   // i.e. at t = (phi_n - phi0)/Omega mod T_m + k T_m (interpolated unless on the grid).
-  std::vector<std::vector<gd::PoincarePoint>> ph(P);
+  std::vector<std::vector<gd::SectionState>> ph(P);
   tbb::parallel_for(0, P, [&](int j) {
     gd::GearInputs gi = c.gear;
     gi.mesh_phase = j * g.mesh_period_angle / P;
@@ -291,7 +291,7 @@ int poincare(const Options& o) {
     const double offset = gd::first_mesh_period_start(gd::derive(gi));  // as the batch's /gear/poincare
     ph[j] = gd::poincare_section(sys, {Tm, offset, transient, c.run.duration, {}});
   });
-  std::vector<gd::PoincarePoint> st;
+  std::vector<gd::SectionState> st;
   if (R > 0) {
     std::vector<gd::LaneSpec> lanes;
     for (int r = 0; r < R; ++r) lanes.push_back(gd::stochastic_lane(c, c.friction_coefficient, r));

@@ -29,7 +29,7 @@ struct ScanOptions {
 
 struct ScanValue {
   double value = 0;
-  std::vector<PoincarePoint> points;  // lane is 0
+  std::vector<SectionState> points;  // lane is 0
   int period = 0;              // smallest p <= max_period with x_{k+p} = x_k (tolerance); 0 = none found
   double min_gap = 0;          // min over the kept window of delta - b [m]; > 0: the teeth never separate
   double min_delta = 0;        // min delta over the kept window [m]; < -b: back-flank contact
@@ -48,6 +48,6 @@ std::vector<ScanValue> bifurcation_scan(const ModelConfig& base, ScanParameter p
 ModelConfig with_parameter(const ModelConfig& base, ScanParameter parameter, double value);
 
 // Smallest period p <= max_period of a sequence of Poincare points (scaled tolerance), 0 if none.
-int detect_period(const std::vector<PoincarePoint>& points, int max_period, const std::vector<double>& tolerance);
+int detect_period(const std::vector<SectionState>& points, int max_period, const std::vector<double>& tolerance);
 
 }  // namespace gear_dynamics

@@ -23,7 +23,9 @@ struct PoincareOptions {
   std::vector<double> lane_period;  // if not empty: one period per lane [s] (overrides period)
 };
 
-struct PoincarePoint {
+// One crossing of the section: the lane's state at t_k (the ROS message of a batch's section is
+// the PoincarePoint message; this is the core's, with the whole state vector).
+struct SectionState {
   int lane = 0;
   std::int64_t k = 0;     // index of the period
   double time = 0;        // t_k [s]
@@ -33,7 +35,7 @@ struct PoincarePoint {
 
 // Steps `system` from its current time to options.end. `after_step`, if set, is called after
 // every step (for statistics of the whole trajectory).
-std::vector<PoincarePoint> poincare_section(LaneSystem& system, const PoincareOptions& options,
+std::vector<SectionState> poincare_section(LaneSystem& system, const PoincareOptions& options,
                                             const std::function<void(const LaneSystem&)>& after_step = {});
 
 }  // namespace gear_dynamics
