@@ -16,6 +16,7 @@
 #include "gear_dynamics/montecarlo/batch.hpp"
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
+#include "cli.hpp"
 #include "params_json.hpp"
 #include "scalar_loop.hpp"
 
@@ -23,20 +24,6 @@ namespace gd = gear_dynamics;
 using gear_bench::ScalarState;
 
 namespace {
-
-const char* kUsage = R"(usage: gear_bench params | engine [options] | scalar [options]
-  --realizations R     stochastic realizations 0..R-1 (default 64)
-  --duration T         simulated time [s] (default 0.05)
-  --check-duration T   deterministic run S1 for the pathwise check [s] (default 0.02)
-  --check-every T      its sampling interval [s] (default 0.001)
-  --threads N          engine threads (default 1)
-  --block L            lanes per engine block (default 32)
-  --repeat K           timed repetitions; the JSON reports each (default 3)
-  --no-noise           engine only: R copies of the deterministic run S1, lanes without
-                       random streams: the engine without the normal generation
-  --output FILE        JSON output (default: stdout)
-The model is the package's default configuration (config/*.yaml).
-)";
 
 struct Options {
   std::string mode;
@@ -48,28 +35,28 @@ struct Options {
 };
 
 Options parse(int argc, char** argv) {
-  if (argc < 2) throw std::runtime_error(kUsage);
   Options o;
-  o.mode = argv[1];
-  for (int i = 2; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error("option " + a + " needs a value");
-      return argv[++i];
-    };
-    if (a == "--realizations") o.realizations = std::stoi(value());
-    else if (a == "--duration") o.duration = std::stod(value());
-    else if (a == "--check-duration") o.check_duration = std::stod(value());
-    else if (a == "--check-every") o.check_every = std::stod(value());
-    else if (a == "--threads") o.threads = std::stoi(value());
-    else if (a == "--block") o.block = std::stoi(value());
-    else if (a == "--repeat") o.repeat = std::stoi(value());
-    else if (a == "--output") o.output = value();
-    else if (a == "--no-noise") o.noise = false;
-    else throw std::runtime_error("unknown option '" + a + "'\n" + kUsage);
-  }
-  if (o.mode != "params" && o.mode != "engine" && o.mode != "scalar")
-    throw std::runtime_error("unknown mode '" + o.mode + "'\n" + kUsage);
+  CLI::App app("The C++ side of bench/run. The model is the package's default configuration (config/*.yaml).",
+               "gear_bench");
+  app.add_option("mode", o.mode,
+                 "params: the model parameters (JSON) for the numpy and Octave versions; engine: times the "
+                 "package's engine (its batch runner); scalar: times the plain scalar loop")
+      ->required()->check(CLI::IsMember({"params", "engine", "scalar"}));
+  app.add_option("--realizations", o.realizations, "stochastic realizations 0..R-1")
+      ->type_name("R")->capture_default_str();
+  app.add_option("--duration", o.duration, "simulated time [s]")->type_name("T")->capture_default_str();
+  app.add_option("--check-duration", o.check_duration, "deterministic run S1 for the pathwise check [s]")
+      ->type_name("T")->capture_default_str();
+  app.add_option("--check-every", o.check_every, "its sampling interval [s]")->type_name("T")->capture_default_str();
+  app.add_option("--threads", o.threads, "engine threads")->type_name("N")->capture_default_str();
+  app.add_option("--block", o.block, "lanes per engine block")->type_name("L")->capture_default_str();
+  app.add_option("--repeat", o.repeat, "timed repetitions; the JSON reports each")->type_name("K")
+      ->capture_default_str();
+  app.add_flag("!--no-noise", o.noise,
+               "engine only: R copies of the deterministic run S1, lanes without random streams: the engine "
+               "without the normal generation");
+  app.add_option("--output", o.output, "JSON output ('-' = stdout)")->type_name("FILE")->capture_default_str();
+  gd::tools::parse_or_exit(app, argc, argv);
   if (o.realizations < 1) throw std::runtime_error("--realizations must be >= 1");
   if (o.threads < 1 || o.block < 1 || o.repeat < 1)
     throw std::runtime_error("--threads, --block and --repeat must be >= 1");

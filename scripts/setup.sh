@@ -24,7 +24,7 @@ GD_PACKAGES=(
   python3-rosnode python3-rosparam rosbash rosout
   libdiagnostic-updater-dev libdiagnostic-msgs-dev python3-diagnostic-msgs libstd-srvs-dev ros-std-srvs python3-std-srvs
   libros-rosgraph-msgs-dev
-  libeigen3-dev librandom123-dev libtbb-dev libyaml-cpp-dev libgtest-dev libbenchmark-dev libboost-dev
+  libeigen3-dev librandom123-dev libtbb-dev libyaml-cpp-dev libgtest-dev libbenchmark-dev libboost-dev libcli11-dev
   python3-matplotlib python3-numpy python3-scipy
 )
 

@@ -24,53 +24,18 @@
 #include "gear_dynamics/dynamics/safety.hpp"
 #include "gear_dynamics/dynamics/spectrum.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
+#include "cli.hpp"
 
 namespace gd = gear_dynamics;
 
 namespace {
 
-const char* kUsage = R"(usage: gear_analyze SUBCOMMAND [options]
-Nonlinear-dynamics tools for the spur-gear model (doc/nonlinear-dynamics.md). Subcommands:
-  spectrum      Welch PSD of delta and of the mesh force of S1 (and of realizations 0..R-1:
-                mean PSD with a 95 % band); mesh harmonics and sidebands marked
-                  --realizations R (0)  --transient S (0.1)  --decimate K (10 steps)
-                  --segment L (30 mesh periods)  --overlap F (0.5)  --harmonics N (6)
-  poincare      (delta, delta_dot) once per mesh period at mesh phase 0: S1, the phase ensemble
-                phi0 = j phi_n / P, and stochastic realizations 0..R-1
-                  --phases P (64)  --realizations R (0)  --transient S (0.2)
-  bifurcation   Poincare points of deterministic runs vs one parameter
-                  --parameter speed|load|mu|damping (speed [rpm], load = Phi0 [m/s^2], mu, zeta_ref)
-                  --from X --to Y --values N (400)  --log  --transient S (1.0)
-  lyapunov      Lyapunov exponents of S1 over the phase ensemble, or along a parameter
-                (--parameter ...), averaged over [--transient, --duration]. --method tangent:
-                both exponents from the variational equation, orthonormalised every
-                --renormalise steps, with the trace check and per-window values; --method pairs:
-                the largest from two trajectories renormalised every --renormalise steps
-                  --method tangent|pairs (tangent)  --phases P (64)  --transient S (0.2)
-                  --renormalise N (100)  --windows T0,T1,... (0,0.1,0.2,0.4; tangent)
-                  --separation D0 (1e-8, in units of b and v_ref; pairs)  --step-divisor M (1; 2 = h/2)
-                  --parameter NAME --from X --to Y --values N [--log]
-  safety        P(delta in I_d and delta_dot in I_v) over time with Wilson bands, first passage
-                out of the safe set after --settle, Kaplan-Meier survival, PDFs (histogram + KDE)
-                  --realizations R (100)  --record-every N (1000 steps)  --settle S (0.3)
-                  --delta-interval LO,HI (0.040,0.055 mm)  --velocity-interval LO,HI (-16,16 mm/s)
-Common options:
-  --duration S        simulated time [s] (spectrum, poincare, safety: run.duration;
-                      bifurcation, lyapunov: 2.0 and 1.2)
-  --config FILE       YAML file overlaid on the defaults (repeatable)
-  --set SEC.KEY=VAL   override one parameter (repeatable)
-  --mu X              friction coefficient (default gear_pair.friction_coefficient)
-  --output PREFIX     CSV files PREFIX_<name>.csv (default gear_analyze)
-  --png               then draw PREFIX_*.png with scripts/plot_dynamics.py
-)";
-
 struct Options {
   std::string command;
-  std::vector<std::string> files, sets;
-  double mu = -1;
+  gd::tools::ModelOptions model;
   std::string output = "gear_analyze";
   bool png = false;
-  std::map<std::string, std::string> kv;
+  std::map<std::string, std::string> kv;  // the subcommand's valued options as given (--name value)
   bool log = false;
   double get(const std::string& k, double def) const {
     auto it = kv.find(k);
@@ -82,68 +47,84 @@ struct Options {
   }
 };
 
+// A subcommand's option --name VALUE, kept as text in o.kv (each command reads it with its default).
+void add_valued(CLI::App& sub, Options& o, const std::string& name, const std::string& value_name,
+                const std::string& description) {
+  sub.add_option_function<std::string>("--" + name, [&o, name](const std::string& v) { o.kv[name] = v; },
+                                       description)
+      ->type_name(value_name);
+}
+
 Options parse(int argc, char** argv) {
   Options o;
-  if (argc < 2) throw std::runtime_error(std::string("a subcommand is needed\n") + kUsage);
-  o.command = argv[1];
-  if (o.command == "-h" || o.command == "--help") { std::cout << kUsage; std::exit(0); }
-  static const std::vector<std::string> valued = {
-      "realizations", "transient", "decimate", "segment", "overlap", "harmonics", "phases", "parameter",
-      "from", "to", "values", "renormalise", "separation", "step-divisor", "record-every", "settle",
-      "delta-interval", "velocity-interval", "duration", "method", "windows"};
-  for (int i = 2; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error("option " + a + " needs a value");
-      return argv[++i];
-    };
-    if (a == "--config") o.files.push_back(value());
-    else if (a == "--set") o.sets.push_back(value());
-    else if (a == "--mu") o.mu = std::stod(value());
-    else if (a == "--output") o.output = value();
-    else if (a == "--png") o.png = true;
-    else if (a == "--log") o.log = true;
-    else if (a == "-h" || a == "--help") { std::cout << kUsage; std::exit(0); }
-    else if (a.rfind("--", 0) == 0 && std::find(valued.begin(), valued.end(), a.substr(2)) != valued.end())
-      o.kv[a.substr(2)] = value();
-    else throw std::runtime_error("unknown option '" + a + "' (gear_analyze --help)");
-  }
+  CLI::App app("Nonlinear-dynamics tools for the spur-gear model (doc/nonlinear-dynamics.md).", "gear_analyze");
+  app.require_subcommand(1);
+  app.fallthrough();  // the common options below may follow the subcommand
+  add_valued(app, o, "duration", "S",
+             "simulated time [s] (spectrum, poincare, safety: run.duration; bifurcation, lyapunov: 2.0 and 1.2)");
+  gd::tools::add_model_options(app, o.model);
+  app.add_option("--output", o.output, "CSV files PREFIX_<name>.csv")->type_name("PREFIX")->capture_default_str();
+  app.add_flag("--png", o.png, "then draw PREFIX_*.png with scripts/plot_dynamics.py");
+
+  CLI::App* spectrum = app.add_subcommand(
+      "spectrum", "Welch PSD of delta and of the mesh force of S1 (and of realizations 0..R-1: mean PSD with a "
+                  "95 % band); mesh harmonics and sidebands marked");
+  add_valued(*spectrum, o, "realizations", "R", "stochastic realizations (default 0)");
+  add_valued(*spectrum, o, "transient", "S", "start-up dropped [s] (default 0.1)");
+  add_valued(*spectrum, o, "decimate", "K", "sample every K steps (default 10)");
+  add_valued(*spectrum, o, "segment", "L", "Welch segment in samples (default 30 mesh periods)");
+  add_valued(*spectrum, o, "overlap", "F", "segment overlap (default 0.5)");
+  add_valued(*spectrum, o, "harmonics", "N", "mesh harmonics marked (default 6)");
+
+  CLI::App* poincare = app.add_subcommand(
+      "poincare", "(delta, delta_dot) once per mesh period at mesh phase 0: S1, the phase ensemble phi0 = j phi_n / P, "
+                  "and stochastic realizations 0..R-1");
+  add_valued(*poincare, o, "phases", "P", "members of the phase ensemble (default 64)");
+  add_valued(*poincare, o, "realizations", "R", "stochastic realizations (default 0)");
+  add_valued(*poincare, o, "transient", "S", "start-up dropped [s] (default 0.2)");
+
+  const auto add_parameter = [&](CLI::App& sub) {
+    add_valued(sub, o, "parameter", "NAME",
+               "speed|load|mu|damping (speed [rpm], load = Phi0 [m/s^2], mu, zeta_ref; default speed)");
+    add_valued(sub, o, "from", "X", "first value of the parameter");
+    add_valued(sub, o, "to", "Y", "last value of the parameter");
+    add_valued(sub, o, "values", "N", "number of values (default 400)");
+    sub.add_flag("--log", o.log, "values spaced logarithmically");
+  };
+  CLI::App* bifurcation = app.add_subcommand("bifurcation", "Poincare points of deterministic runs vs one parameter");
+  add_parameter(*bifurcation);
+  add_valued(*bifurcation, o, "transient", "S", "start-up dropped [s] (default 1.0)");
+
+  CLI::App* lyapunov = app.add_subcommand(
+      "lyapunov", "Lyapunov exponents of S1 over the phase ensemble, or along a parameter (--parameter ...), "
+                  "averaged over [--transient, --duration]. --method tangent: both exponents from the variational "
+                  "equation, orthonormalised every --renormalise steps, with the trace check and per-window values; "
+                  "--method pairs: the largest from two trajectories renormalised every --renormalise steps");
+  add_valued(*lyapunov, o, "method", "tangent|pairs", "(default tangent)");
+  add_valued(*lyapunov, o, "phases", "P", "members of the phase ensemble (default 64)");
+  add_valued(*lyapunov, o, "transient", "S", "start-up dropped [s] (default 0.2)");
+  add_valued(*lyapunov, o, "renormalise", "N", "steps between renormalisations (default 100)");
+  add_valued(*lyapunov, o, "windows", "T0,T1,...", "window edges [s] (default 0,0.1,0.2,0.4; tangent)");
+  add_valued(*lyapunov, o, "separation", "D0", "initial separation in units of b and v_ref (default 1e-8; pairs)");
+  add_valued(*lyapunov, o, "step-divisor", "M", "time step h/M (default 1; 2 = h/2)");
+  add_parameter(*lyapunov);
+
+  CLI::App* safety = app.add_subcommand(
+      "safety", "P(delta in I_d and delta_dot in I_v) over time with Wilson bands, first passage out of the safe set "
+                "after --settle, Kaplan-Meier survival, PDFs (histogram + KDE)");
+  add_valued(*safety, o, "realizations", "R", "stochastic realizations (default 100)");
+  add_valued(*safety, o, "record-every", "N", "record every N steps (default 1000)");
+  add_valued(*safety, o, "settle", "S", "settling time [s] (default 0.3)");
+  add_valued(*safety, o, "delta-interval", "LO,HI", "I_d [mm] (default 0.040,0.055)");
+  add_valued(*safety, o, "velocity-interval", "LO,HI", "I_v [mm/s] (default -16,16)");
+
+  gd::tools::parse_or_exit(app, argc, argv);
+  o.command = app.get_subcommands().front()->get_name();
   return o;
 }
 
-std::string config_dir() {
-  namespace fs = std::filesystem;
-  std::vector<fs::path> tried;
-  if (const char* env = std::getenv("GEAR_DYNAMICS_CONFIG_DIR")) tried.emplace_back(env);
-  std::error_code ec;
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (!ec) tried.push_back(exe.parent_path().parent_path().parent_path() / "share" / "gear_dynamics" / "config");
-  if (const char* rpp = std::getenv("ROS_PACKAGE_PATH")) {
-    std::stringstream paths(rpp);
-    for (std::string root; std::getline(paths, root, ':');)
-      if (!root.empty()) tried.push_back(fs::path(root) / "gear_dynamics" / "config");
-  }
-  for (const fs::path& d : tried)
-    if (fs::is_regular_file(d / "gear_pair.yaml", ec)) return d.string();
-  throw std::runtime_error("cannot find the default configuration (gear_pair.yaml); set GEAR_DYNAMICS_CONFIG_DIR");
-}
-
-void apply_set(YAML::Node& root, const std::string& assignment) {
-  const auto eq = assignment.find('='), dot = assignment.find('.');
-  if (eq == std::string::npos || dot == std::string::npos || dot > eq)
-    throw std::runtime_error("--set expects SECTION.KEY=VALUE, got '" + assignment + "'");
-  YAML::Node overlay;
-  overlay[assignment.substr(0, dot)][assignment.substr(dot + 1, eq - dot - 1)] = YAML::Load(assignment.substr(eq + 1));
-  gd::merge_yaml(root, overlay);
-}
-
 gd::ModelConfig load_config(const Options& o, double duration) {
-  const std::string dir = config_dir();
-  std::vector<std::string> files = {dir + "/gear_pair.yaml", dir + "/load.yaml", dir + "/run.yaml"};
-  files.insert(files.end(), o.files.begin(), o.files.end());
-  YAML::Node root = gd::read_yaml_files(files);
-  for (const auto& s : o.sets) apply_set(root, s);
-  if (o.mu >= 0) root["gear_pair"]["friction_coefficient"] = o.mu;
+  YAML::Node root = gd::tools::model_yaml(o.model);
   if (duration > 0) {
     root["run"]["duration"] = duration;
     if (root["run"]["window"] && root["run"]["window"].as<double>() > duration) root["run"]["window"] = duration;
@@ -625,7 +606,7 @@ int safety(const Options& o) {
 
 void draw(const Options& o) {
   namespace fs = std::filesystem;
-  const fs::path script = fs::path(config_dir()).parent_path() / "scripts" / "plot_dynamics.py";
+  const fs::path script = fs::path(gd::tools::config_dir()).parent_path() / "scripts" / "plot_dynamics.py";
   if (!fs::exists(script)) throw std::runtime_error("--png: cannot find " + script.string());
   const std::string cmd = "/usr/bin/python3 '" + script.string() + "' " + o.command + " '" + o.output + "'";
   if (std::system(cmd.c_str()) != 0) throw std::runtime_error("--png: '" + cmd + "' failed");

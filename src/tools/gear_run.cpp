@@ -19,49 +19,27 @@
 #include "gear_dynamics/config/sweep.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
 #include "gear_dynamics/engine/simulation.hpp"
+#include "cli.hpp"
 
 namespace gd = gear_dynamics;
 
 namespace {
 
-const char* kUsage = R"(usage: gear_run [options]
-Runs the deterministic run S1 and stochastic realizations of the spur-gear model.
-  --config FILE       YAML file overlaid on the defaults (repeatable)
-  --set SEC.KEY=VAL   override one parameter, e.g. --set run.duration=0.1 (repeatable)
-  --mu X              friction coefficient (default: gear_pair.friction_coefficient)
-  --seed N            seed (default: run.seed)
-  --realizations N    stochastic realizations 0..N-1 besides S1 (default 2: S2, S3)
-  --no-deterministic  leave out S1
-  --rate HZ           CSV sample rate in simulated Hz (default 1000; 0 = no CSV)
-  --output FILE       CSV path (default gear_run.csv; '-' = stdout)
-  --print-parameters SECTION
-                      print the Markdown table of a configuration section (gear_pair, load,
-                      run, monte_carlo, simulator, analysis, aggregator) and exit
-  --check-simulator   only validate the configuration as gear_simulator would (config/simulator.yaml
-                      included): print 'valid' and exit 0, or the problems on stderr and exit 1
-                      (simulate.launch runs this while it is parsed, so a bad value ends roslaunch
-                      with a non-zero exit code before any node starts)
-  --record-dir DIR    with --check-simulator: DIR must be an existing writable folder (record:=true)
-  --sweep KEY=V1,V2,...  run every point of a grid (repeatable: the product), e.g.
-                      --sweep load.sigma=0,2.5,5 or --sweep load.initial_mean=1:100:3:log
-                      (from:to:count[:log]); KEY is any scalar gear_pair/load key (doc/studies.md).
-                      Run names get the point, p0001_S1; a summary line per run and point.
+const char* kDescription = R"(Runs the deterministic run S1 and stochastic realizations of the spur-gear model.
 The defaults come from the package's config/ folder: $GEAR_DYNAMICS_CONFIG_DIR if set, else the
 installed share/gear_dynamics/config, else gear_dynamics/config on $ROS_PACKAGE_PATH.
 Snapshot times after run.duration are dropped with a notice (a short --set run.duration run).
 CSV columns (SI): run,t,delta,delta_dot,phi,center_distance.
-Summary lines use the paper's units: mm, mm/s, mm s^-1/2.
-)";
+Summary lines use the paper's units: mm, mm/s, mm s^-1/2.)";
 
 struct Options {
-  std::vector<std::string> files;
-  std::vector<std::string> sets;
-  std::optional<double> mu;      // --mu, else the configuration's
+  gd::tools::ModelOptions model;
   std::optional<long long> seed;  // --seed, else the configuration's
   int realizations = 2;
   bool deterministic = true;
   double rate = 1000.0;
   std::string output = "gear_run.csv";
+  std::optional<std::string> print_parameters;
   bool check_simulator = false;
   std::string record_dir;
   std::vector<std::string> sweeps;
@@ -82,64 +60,34 @@ void print_parameters(const std::string& name) {
 
 Options parse(int argc, char** argv) {
   Options o;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error("option " + a + " needs a value");
-      return argv[++i];
-    };
-    if (a == "--config") o.files.push_back(value());
-    else if (a == "--set") o.sets.push_back(value());
-    else if (a == "--mu") o.mu = std::stod(value());
-    else if (a == "--seed") o.seed = std::stoll(value());
-    else if (a == "--realizations") o.realizations = std::stoi(value());
-    else if (a == "--no-deterministic") o.deterministic = false;
-    else if (a == "--rate") o.rate = std::stod(value());
-    else if (a == "--output") o.output = value();
-    else if (a == "--print-parameters") { print_parameters(value()); std::exit(0); }
-    else if (a == "--check-simulator") o.check_simulator = true;
-    else if (a == "--record-dir") o.record_dir = value();
-    else if (a == "--sweep") o.sweeps.push_back(value());
-    else if (a == "-h" || a == "--help") { std::cout << kUsage; std::exit(0); }
-    else throw std::runtime_error("unknown option '" + a + "'\n" + kUsage);
-  }
+  CLI::App app(kDescription, "gear_run");
+  gd::tools::add_model_options(app, o.model);
+  app.add_option("--seed", o.seed, "seed (default: run.seed)")->type_name("N");
+  app.add_option("--realizations", o.realizations, "stochastic realizations 0..N-1 besides S1 (S2, S3)")
+      ->type_name("N")->capture_default_str();
+  app.add_flag("!--no-deterministic", o.deterministic, "leave out S1");
+  app.add_option("--rate", o.rate, "CSV sample rate in simulated Hz (0 = no CSV)")
+      ->type_name("HZ")->capture_default_str();
+  app.add_option("--output", o.output, "CSV path ('-' = stdout)")->type_name("FILE")->capture_default_str();
+  app.add_option("--print-parameters", o.print_parameters,
+                 "print the Markdown table of a configuration section and exit")
+      ->type_name("SECTION");
+  app.add_flag("--check-simulator", o.check_simulator, "only validate the configuration as gear_simulator would");
+  app.add_option("--record-dir", o.record_dir, "with --check-simulator: DIR must be a writable folder")
+      ->type_name("DIR");
+  gd::tools::add_repeatable(app, "--sweep", o.sweeps, "run every point of a grid (repeatable: the product)")
+      ->type_name("KEY=V1,V2,...");
+  app.footer(R"(--print-parameters SECTION: gear_pair, load, run, monte_carlo, simulator, analysis or aggregator.
+--check-simulator: config/simulator.yaml included; prints 'valid' and exits 0, or the problems on
+  stderr and exits 1 (simulate.launch runs this while it is parsed, so a bad value ends roslaunch
+  with a non-zero exit code before any node starts); --record-dir for record:=true.
+--sweep KEY=V1,V2,... or KEY=from:to:count[:log], e.g. --sweep load.sigma=0,2.5,5 or
+  --sweep load.initial_mean=1:100:3:log; KEY is any scalar gear_pair/load key (doc/studies.md).
+  Run names get the point, p0001_S1; a summary line per run and point.)");
+  gd::tools::parse_or_exit(app, argc, argv);
   if (o.realizations < 0) throw std::runtime_error("--realizations must be >= 0");
   if (o.rate < 0) throw std::runtime_error("--rate must be >= 0 Hz");
   return o;
-}
-
-// "--set run.duration=0.1" as a YAML overlay.
-void apply_set(YAML::Node& root, const std::string& assignment) {
-  const auto eq = assignment.find('='), dot = assignment.find('.');
-  if (eq == std::string::npos || dot == std::string::npos || dot > eq)
-    throw std::runtime_error("--set expects SECTION.KEY=VALUE, got '" + assignment + "'");
-  YAML::Node overlay;
-  overlay[assignment.substr(0, dot)][assignment.substr(dot + 1, eq - dot - 1)] =
-      YAML::Load(assignment.substr(eq + 1));
-  gd::merge_yaml(root, overlay);
-}
-
-// The folder holding gear_pair.yaml, load.yaml and run.yaml (see kUsage); never a path fixed at
-// build time, so an installed gear_run finds its installed defaults.
-std::string config_dir() {
-  namespace fs = std::filesystem;
-  std::vector<fs::path> tried;
-  if (const char* env = std::getenv("GEAR_DYNAMICS_CONFIG_DIR")) tried.emplace_back(env);
-  std::error_code ec;
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);  // <prefix>/lib/gear_dynamics/gear_run
-  if (!ec) tried.push_back(exe.parent_path().parent_path().parent_path() / "share" / "gear_dynamics" / "config");
-  if (const char* rpp = std::getenv("ROS_PACKAGE_PATH")) {
-    std::stringstream paths(rpp);
-    for (std::string root; std::getline(paths, root, ':');)
-      if (!root.empty()) tried.push_back(fs::path(root) / "gear_dynamics" / "config");
-  }
-  std::string list;
-  for (const fs::path& d : tried) {
-    if (fs::is_regular_file(d / "gear_pair.yaml", ec)) return d.string();
-    list += "\n  " + d.string();
-  }
-  throw std::runtime_error("cannot find the default configuration (gear_pair.yaml); looked in:" + list +
-                           "\nset GEAR_DYNAMICS_CONFIG_DIR to the package's config folder");
 }
 
 // Drops run.snapshot_times that lie after run.duration, with one notice, so that a short run set
@@ -167,14 +115,13 @@ void drop_late_snapshots(YAML::Node& root) {
 
 int main(int argc, char** argv) try {
   const Options opt = parse(argc, argv);
-  const std::string dir = config_dir();
-  std::vector<std::string> files = {dir + "/gear_pair.yaml", dir + "/load.yaml", dir + "/run.yaml"};
-  if (opt.check_simulator) files.push_back(dir + "/simulator.yaml");
-  files.insert(files.end(), opt.files.begin(), opt.files.end());
-  YAML::Node root = gd::read_yaml_files(files);
-  for (const auto& s : opt.sets) apply_set(root, s);
+  if (opt.print_parameters) {
+    print_parameters(*opt.print_parameters);
+    return 0;
+  }
+  YAML::Node root = gd::tools::model_yaml(opt.model, opt.check_simulator ? std::vector<std::string>{"simulator.yaml"}
+                                                                         : std::vector<std::string>{});
   // Validated with the rest: a negative value is refused by name, not ignored.
-  if (opt.mu) root["gear_pair"]["friction_coefficient"] = *opt.mu;
   if (opt.seed) root["run"]["seed"] = *opt.seed;
   if (opt.check_simulator) {
     try {

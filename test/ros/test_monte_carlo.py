@@ -146,7 +146,7 @@ class MonteCarloNode(unittest.TestCase):
         self.assertFalse(os.path.exists(os.path.join(self.folder('bad'), 'manifest.yaml')))
 
     def test_4_gear_run_refuses_negative_options(self):
-        # --mu and --seed go through the same validation as the files (they were once ignored when < 0).
+        # --mu and --seed go through the same validation as the files: a value < 0 is refused, not ignored.
         for option, value, message in (('--mu', '-0.1', 'gear_pair.friction_coefficient = -0.1 is out of range'),
                                        ('--seed', '-4', 'run.seed = -4 is out of range')):
             res = subprocess.run(['rosrun', 'gear_dynamics', 'gear_run', option, value, '--rate', '0'],
