@@ -8,7 +8,6 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "gear_dynamics/montecarlo/batch.hpp"
 #include "gear_dynamics/config/config.hpp"
 
 namespace gear_dynamics {

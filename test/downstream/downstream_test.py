@@ -25,9 +25,9 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 CALLS = {
     "model": "gd::derive(gd::GearInputs{}).contact_ratio",
     "engine": "gd::grid_time(83123000, 1e-6)",
-    "config": "gd::mu_label(0.04).size()",
+    "config": "gd::mu_label(0.04).size() + std::string(gd::to_string(gd::RunKind::S1)).size()",
     "live": "gd::to_string(gd::LoadInput::Sde).size()",
-    "montecarlo": "std::string(gd::to_string(gd::RunKind::S1)).size()",
+    "montecarlo": "gd::shard_runs({}, 0, 1).size()",
     "analysis": "gd::wilson(3, 10).estimate",
     "dynamics": "gd::welch_psd(std::vector<double>(64, 1.0), 1000.0, {16, 0.5}).sample_rate",
     "ros": "gd::make_poincare_point(gd::SectionPoint{}).t",

@@ -1,7 +1,10 @@
 #!/usr/bin/python3
-"""The core's layering, checked on the source tree: each core layer (include/gear_dynamics/<layer>/
-and src/<layer>/) includes only headers of its own layer and the layers below it, and no ROS header
-(roscpp, rosbag, messages, dynamic_reconfigure, the package's generated message headers).
+"""The core's layering, checked on the source tree against a declared graph (LAYERS): each core layer
+(include/gear_dynamics/<layer>/ and src/<layer>/) includes only headers of its own layer and of the
+layers it depends on, directly or through others, and no ROS header (roscpp, rosbag, messages,
+dynamic_reconfigure, the package's generated message headers). Each core library's CMake links
+must be edges of the same graph, and every folder under include/gear_dynamics/ and src/ must be a
+declared layer or one of the ROS-side folders.
 
 usage: check_layers.py JUNIT_XML"""
 import os
@@ -10,8 +13,20 @@ import sys
 import time
 import xml.etree.ElementTree as ET
 
-# Bottom to top; a layer may include its own headers and those of every layer before it.
-LAYERS = ["model", "engine", "config", "live", "montecarlo", "analysis", "dynamics"]
+# The core's layers and what each depends on directly (a DAG). A layer may include its own headers
+# and those of every layer it reaches; siblings (live, montecarlo, analysis on config) may not
+# include each other.
+LAYERS = {
+    "model": [],
+    "engine": ["model"],
+    "config": ["engine"],
+    "live": ["config"],
+    "montecarlo": ["config"],
+    "analysis": ["config"],
+    "dynamics": ["analysis"],
+}
+# Folders above the core, allowed ROS: the ROS libraries, the nodes' mains and the CLIs.
+OUTSIDE = {"ros", "nodes", "tools"}
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 INCLUDE = re.compile(r'^\s*#\s*include\s*[<"]([^>"]+)[>"]', re.M)
 # Headers that mean ROS: the ROS client libraries and message packages, and the package's own
@@ -20,9 +35,33 @@ ROS_HEADER = re.compile(r"^(ros|rosbag|roscpp|std_msgs|std_srvs|rosgraph_msgs|di
                         r"dynamic_reconfigure|xmlrpcpp|message_filters)/|^gear_dynamics/[A-Z]\w*\.h$")
 
 
-def violations(layer, text):
+def reachable(layer, graph=None):
+    """`layer` and every layer it depends on, directly or not; ValueError on a cycle or an
+    undeclared dependency."""
+    graph = LAYERS if graph is None else graph
+    seen, path = [], []
+
+    def visit(node):
+        if node in path:
+            raise ValueError(f"the layer graph has a cycle: {' -> '.join(path + [node])}")
+        if node not in graph:
+            raise ValueError(f"layer '{node}' is not declared (declared: {', '.join(graph)})")
+        if node in seen:
+            return
+        path.append(node)
+        for below in graph[node]:
+            visit(below)
+        path.pop()
+        seen.append(node)
+
+    visit(layer)
+    return seen
+
+
+def violations(layer, text, graph=None):
     """The offending includes of one file of `layer`, each with the reason."""
-    allowed = LAYERS[:LAYERS.index(layer) + 1]
+    graph = LAYERS if graph is None else graph
+    allowed = reachable(layer, graph)
     out = []
     for header in INCLUDE.findall(text):
         if ROS_HEADER.search(header):
@@ -30,8 +69,37 @@ def violations(layer, text):
         elif header.startswith("gear_dynamics/"):
             parts = header.split("/")
             other = parts[1] if len(parts) > 2 else "(top level)"
-            if other not in allowed:
-                out.append(f"{header}: layer '{other}' is not below '{layer}' (allowed: {', '.join(allowed)})")
+            if other not in graph:
+                out.append(f"{header}: '{other}' is not a declared core layer (from '{layer}')")
+            elif other not in allowed:
+                out.append(f"{header}: layer '{other}' is not below '{layer}' (allowed: {', '.join(sorted(allowed))})")
+    return out
+
+
+def link_violations(cmake_text, graph=None):
+    """Links of a core library (target_link_libraries(${PROJECT_NAME}_<layer> ...)) to another
+    layer's library that the graph does not declare as a direct dependency."""
+    graph = LAYERS if graph is None else graph
+    out = []
+    for layer, args in re.findall(r"target_link_libraries\(\$\{PROJECT_NAME\}_(\w+)\s([^)]*)\)", cmake_text):
+        if layer not in graph:
+            continue
+        for other in re.findall(r"\$\{PROJECT_NAME\}_(\w+)", args):
+            if other in OUTSIDE or other not in graph:
+                out.append(f"gear_dynamics_{layer} links gear_dynamics_{other}, which is not a core layer")
+            elif other not in graph[layer]:
+                out.append(f"gear_dynamics_{layer} links gear_dynamics_{other}: not a declared dependency "
+                           f"(declared: {', '.join(graph[layer]) or 'none'})")
+    return out
+
+
+def undeclared_folders():
+    """Folders of include/gear_dynamics/ and src/ that are neither a declared layer nor outside the core."""
+    out = []
+    for base in (os.path.join(ROOT, "include", "gear_dynamics"), os.path.join(ROOT, "src")):
+        for name in sorted(os.listdir(base)):
+            if os.path.isdir(os.path.join(base, name)) and name not in LAYERS and name not in OUTSIDE:
+                out.append(f"{os.path.relpath(os.path.join(base, name), ROOT)}: not a declared layer (LAYERS)")
     return out
 
 
@@ -44,18 +112,47 @@ def files_of(layer):
 
 
 def self_check():
-    """The checker must catch what it is for: an upward include and a ROS header."""
+    """The checker must catch what it is for: an upward, a sibling's or an undeclared layer's include,
+    a ROS header, a link outside the graph, a cycle."""
     assert violations("engine", '#include "gear_dynamics/config/config.hpp"\n'), "upward include not caught"
+    assert violations("live", '#include "gear_dynamics/montecarlo/batch.hpp"\n'), "sibling include not caught"
+    assert violations("analysis", '#include "gear_dynamics/live/live_simulation.hpp"\n'), "sibling include not caught"
+    assert violations("config", '#include "gear_dynamics/maths/x.hpp"\n'), "undeclared layer not caught"
     assert violations("analysis", "#include <ros/ros.h>\n"), "ROS header not caught"
     assert violations("config", '#include "gear_dynamics/GearState.h"\n'), "message header not caught"
     assert not violations("analysis", '#include "gear_dynamics/model/gear_pair.hpp"\n#include <vector>\n')
+    assert not violations("dynamics", '#include "gear_dynamics/engine/observers.hpp"\n')
+    assert link_violations("target_link_libraries(${PROJECT_NAME}_analysis PUBLIC ${PROJECT_NAME}_montecarlo)"), \
+        "undeclared link not caught"
+    assert link_violations("target_link_libraries(${PROJECT_NAME}_config PUBLIC ${PROJECT_NAME}_ros)"), \
+        "link to the ROS layer not caught"
+    assert not link_violations("target_link_libraries(${PROJECT_NAME}_live PUBLIC ${PROJECT_NAME}_config)")
+    try:
+        reachable("a", {"a": ["b"], "b": ["a"]})
+        raise AssertionError("cycle not caught")
+    except ValueError:
+        pass
     return []
+
+
+def check_graph():
+    """The declared graph itself: acyclic, every dependency declared; the folders and the links."""
+    problems = []
+    for layer in LAYERS:
+        try:
+            reachable(layer)
+        except ValueError as e:
+            problems.append(str(e))
+    problems += undeclared_folders()
+    with open(os.path.join(ROOT, "CMakeLists.txt"), encoding="utf-8") as f:
+        problems += link_violations(f.read())
+    return problems
 
 
 def main():
     suite = ET.Element("testsuite", name="layers")
     failures = 0
-    cases = [("checker_catches_violations", self_check)]
+    cases = [("checker_catches_violations", self_check), ("graph_folders_and_links", check_graph)]
     for layer in LAYERS:
         def check(layer=layer):
             problems, n = [], 0

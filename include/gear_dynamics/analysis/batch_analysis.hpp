@@ -12,7 +12,7 @@
 
 #include "gear_dynamics/analysis/statistics.hpp"
 #include "gear_dynamics/config/analysis_settings.hpp"
-#include "gear_dynamics/montecarlo/run_kind.hpp"
+#include "gear_dynamics/config/run_kind.hpp"
 
 namespace gear_dynamics {
 

@@ -12,7 +12,7 @@
 #include "gear_dynamics/PoincarePoint.h"
 #include "gear_dynamics/RunInfo.h"
 #include "gear_dynamics/RunSummary.h"
-#include "gear_dynamics/montecarlo/run_kind.hpp"
+#include "gear_dynamics/config/run_kind.hpp"
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
 #include "gear_dynamics/engine/simulation.hpp"
