@@ -99,6 +99,370 @@ std::string median_with_interval(const BoxStats& b, int decimals) {
 
 double optional_value(const std::optional<double>& v) { return v ? *v : std::nan(""); }
 
+// What every file of the report is written from, and the list of the files written so far.
+struct ReportFiles {
+  fs::path dir;
+  const BatchInputs& in;
+  const BatchAnalysis& a;
+  const AnalysisSettings& s;
+  bool paper_table4;       // the paper's Table 4 applies (its own intervals)
+  std::string key_header;  // row keys: mu for the mu sweep (format 1), else the point and its values
+  std::string pct;         // the confidence, "95 %"
+  std::vector<std::string>& written;
+
+  std::string key(const MuAnalysis& m) const {
+    return a.keys.empty() ? general(m.mu) : a.keys.at(static_cast<std::size_t>(&m - a.mu.data()));
+  }
+};
+
+// batch.csv: the batch's settings and how many runs it used.
+void write_batch_csv(const ReportFiles& R) {
+  const BatchInputs& in = R.in;
+  const AnalysisSettings& s = R.s;
+  const fs::path& dir = R.dir;
+  std::vector<std::string>& written = R.written;
+  Csv c(dir / "batch.csv", written, "key,value,unit");
+  c.row("duration", in.config.run.duration, "s");
+  c.row("time_step", in.config.run.time_step, "s");
+  c.row("window", in.config.run.window, "s");
+  c.row("seed", in.config.seed, "");
+  c.row("confidence", s.confidence, "");
+  c.row("runs_expected", in.expected_runs, "");
+  c.row("runs_used", in.runs.size(), "");
+  c.row("bags_skipped", in.skipped.size(), "");
+  c.row("missing", in.missing.size(), "");
+}
+
+// runs.csv: one row per run used.
+void write_runs_csv(const ReportFiles& R) {
+  const BatchInputs& in = R.in;
+  const fs::path& dir = R.dir;
+  std::vector<std::string>& written = R.written;
+  Csv c(dir / "runs.csv", written,
+        "name,kind,mu,index,d[mm*s^-1/2],t_ss[s],t_ss_fine[s],reached_steady_state,delta_T[mm],"
+        "delta_dot_T[mm/s],phi_T[mm/s^2]");
+  for (const RunRecord& r : in.runs)
+    c.row(r.name, to_string(r.kind), r.mu, r.index, r.center_distance * U, r.steady_state_time,
+          r.steady_state_time_fine, r.reached_steady_state ? 1 : 0, r.final_delta * U, r.final_delta_dot * U,
+          r.final_phi * U);
+}
+
+// box_stats.csv: the box statistics of every quantity per group.
+void write_box_stats_csv(const ReportFiles& R) {
+  const BatchAnalysis& a = R.a;
+  const fs::path& dir = R.dir;
+  std::vector<std::string>& written = R.written;
+  const std::string& kh = R.key_header;
+  const auto key = [&R](const MuAnalysis& m) { return R.key(m); };
+  Csv c(dir / "box_stats.csv", written, kh + ",group,quantity,unit," + kBoxHeader);
+  for (const MuAnalysis& m : a.mu) {
+    box_row(c, key(m), "stochastic", "d", "mm*s^-1/2", m.center_distance, U);
+    box_row(c, key(m), "stochastic", "t_ss", "s", m.steady_state_time, 1);
+    box_row(c, key(m), "stochastic", "t_ss_fine", "s", m.steady_state_time_fine, 1);
+    box_row(c, key(m), "stochastic", "delta_T", "mm", m.final_delta, U);
+    box_row(c, key(m), "stochastic", "delta_dot_T", "mm/s", m.final_delta_dot, U);
+    box_row(c, key(m), "phase", "d", "mm*s^-1/2", m.phase_center_distance, U);
+    box_row(c, key(m), "phase", "t_ss", "s", m.phase_steady_state_time, 1);
+    box_row(c, key(m), "phase", "delta_T", "mm", m.phase_final_delta, U);
+    box_row(c, key(m), "phase", "delta_dot_T", "mm/s", m.phase_final_delta_dot, U);
+  }
+}
+
+// probabilities.csv: the Wilson intervals, with the paper's values where it has them.
+void write_probabilities_csv(const ReportFiles& R) {
+  const BatchInputs& in = R.in;
+  const BatchAnalysis& a = R.a;
+  const AnalysisSettings& s = R.s;
+  const fs::path& dir = R.dir;
+  std::vector<std::string>& written = R.written;
+  const std::string& kh = R.key_header;
+  const auto key = [&R](const MuAnalysis& m) { return R.key(m); };
+  const bool paper_table4 = R.paper_table4;
+  Csv c(dir / "probabilities.csv", written,
+        kh + ",quantity,reference,successes,trials,estimate,wilson_low,wilson_high,paper,paper_in_interval");
+  for (const MuAnalysis& m : a.mu) {
+    const PaperReference* p = a.keys.empty() ? paper_at(m.mu) : nullptr;  // a study's points are not the paper's
+    const double nan = std::nan("");
+    const double p93 = p && std::abs(m.mu - kPaperMuExceeds) < 1e-9 ? kPaperExceedsS1 : nan;
+    probability_row(c, key(m), "d>d_S1", m.s1 ? general(m.s1->center_distance * U) + " mm*s^-1/2" : "no S1",
+                    m.d_exceeds_s1, p93);
+    probability_row(c, key(m), "d>median_phase_d", general(m.phase_center_distance.median * U) + " mm*s^-1/2",
+                    m.d_exceeds_phase_median, nan);
+    probability_row(c, key(m), "delta_T_in", interval_text(s.delta_interval, 4) + " mm", m.delta_in_interval,
+                    p && paper_table4 ? p->p_delta / 100 : nan);
+    probability_row(c, key(m), "delta_dot_T_in", interval_text(s.delta_dot_interval, 1) + " mm/s",
+                    m.delta_dot_in_interval, p && paper_table4 ? p->p_delta_dot / 100 : nan);
+    probability_row(c, key(m), "t_ss<T", "T = " + general(in.config.run.duration) + " s", m.reached_steady_state, nan);
+  }
+}
+
+// table3.csv: S1, S2, S3 beside the paper's Table 3.
+void write_table3_csv(const ReportFiles& R) {
+  const BatchAnalysis& a = R.a;
+  const fs::path& dir = R.dir;
+  std::vector<std::string>& written = R.written;
+  const std::string& kh = R.key_header;
+  const auto key = [&R](const MuAnalysis& m) { return R.key(m); };
+  Csv c(dir / "table3.csv", written,
+        kh + ",s1_delta_T[mm],paper_delta_T[mm],s1_delta_dot_T[mm/s],paper_delta_dot_T[mm/s],s1_d[mm*s^-1/2],"
+        "s2_d[mm*s^-1/2],s3_d[mm*s^-1/2],s1_t_ss[s]");
+  for (const MuAnalysis& m : a.mu) {
+    const PaperReference* p = a.keys.empty() ? paper_at(m.mu) : nullptr;
+    const double nan = std::nan("");
+    c.row(key(m), m.s1 ? m.s1->final_delta * U : nan, p ? p->delta_T : nan, m.s1 ? m.s1->final_delta_dot * U : nan,
+          p ? p->delta_dot_T : nan, m.s1 ? m.s1->center_distance * U : nan, optional_value(m.s2_center_distance) * U,
+          optional_value(m.s3_center_distance) * U, m.s1 ? m.s1->steady_state_time : nan);
+  }
+}
+
+// pdf_delta.csv, pdf_delta_dot.csv, joint_pdf.csv, pdf_outside.csv: the histograms at T and over time.
+void write_pdfs_csv(const ReportFiles& R) {
+  const BatchInputs& in = R.in;
+  const BatchAnalysis& a = R.a;
+  const AnalysisSettings& s = R.s;
+  const fs::path& dir = R.dir;
+  std::vector<std::string>& written = R.written;
+  const std::string& kh = R.key_header;
+  const auto key = [&R](const MuAnalysis& m) { return R.key(m); };
+  Csv cd(dir / "pdf_delta.csv", written, kh + ",lo[mm],hi[mm],count,density[1/mm]");
+  Csv cv(dir / "pdf_delta_dot.csv", written, kh + ",lo[mm/s],hi[mm/s],count,density[s/mm]");
+  Csv cj(dir / "joint_pdf.csv", written,
+         kh + ",t[s],delta_lo[mm],delta_hi[mm],delta_dot_lo[mm/s],delta_dot_hi[mm/s],count,density[s/mm^2]");
+  Csv co(dir / "pdf_outside.csv", written, kh + ",quantity,t[s],outside,total,fraction");
+  for (const MuAnalysis& m : a.mu) {
+    for (std::size_t i = 0; i < m.delta_pdf.counts.size(); ++i)
+      cd.row(key(m), m.delta_pdf.edges[i] * U, m.delta_pdf.edges[i + 1] * U, m.delta_pdf.counts[i],
+             m.delta_pdf.density(i) / U);
+    for (std::size_t i = 0; i < m.delta_dot_pdf.counts.size(); ++i)
+      cv.row(key(m), m.delta_dot_pdf.edges[i] * U, m.delta_dot_pdf.edges[i + 1] * U, m.delta_dot_pdf.counts[i],
+             m.delta_dot_pdf.density(i) / U);
+    const double T = in.config.run.duration;
+    co.row(key(m), "delta_T", T, m.delta_pdf.outside, m.delta_pdf.total, m.delta_pdf.fraction_outside());
+    co.row(key(m), "delta_dot_T", T, m.delta_dot_pdf.outside, m.delta_dot_pdf.total, m.delta_dot_pdf.fraction_outside());
+    for (std::size_t k = 0; k < m.joint_pdf.size(); ++k) {
+      const Histogram2D& h = m.joint_pdf[k];
+      const std::size_t ny = h.y_edges.size() - 1;
+      for (std::size_t i = 0; i + 1 < h.x_edges.size(); ++i)
+        for (std::size_t j = 0; j < ny; ++j)
+          cj.row(key(m), s.joint_times[k], h.x_edges[i] * U, h.x_edges[i + 1] * U, h.y_edges[j] * U,
+                 h.y_edges[j + 1] * U, h.counts[i * ny + j], h.density(i, j) / (U * U));
+      co.row(key(m), "joint", s.joint_times[k], h.outside, h.total, h.fraction_outside());
+    }
+  }
+}
+
+// rank_tests.csv: Kruskal-Wallis and Friedman across the groups.
+void write_rank_tests_csv(const ReportFiles& R) {
+  const BatchAnalysis& a = R.a;
+  const fs::path& dir = R.dir;
+  std::vector<std::string>& written = R.written;
+  Csv c(dir / "rank_tests.csv", written, "test,statistic,df,n,p_value,valid");
+  c.row("kruskal_wallis", a.kruskal_wallis.statistic, a.kruskal_wallis.df, a.kruskal_wallis.n,
+        a.kruskal_wallis.p_value, a.kruskal_wallis.valid ? 1 : 0);
+  c.row("friedman", a.friedman.statistic, a.friedman.df, a.friedman.n, a.friedman.p_value, a.friedman.valid ? 1 : 0);
+}
+
+// inputs.csv: the bags skipped and the runs missing.
+void write_inputs_csv(const ReportFiles& R) {
+  const BatchInputs& in = R.in;
+  const fs::path& dir = R.dir;
+  std::vector<std::string>& written = R.written;
+  Csv c(dir / "inputs.csv", written, "item,status,reason");
+  for (const SkippedFile& f : in.skipped) c.row(quoted(f.file), "skipped", quoted(f.reason));
+  for (const std::string& m : in.missing) c.row(quoted(m), "missing", "");
+}
+
+// report.md: The heading: folders, settings, runs used, units.
+void md_heading(std::ostream& r, const ReportFiles& R) {
+  const BatchInputs& in = R.in;
+  const std::string& pct = R.pct;
+  r << "# gear_dynamics batch report\n\n";
+  r << "Batch folder(s): ";
+  for (std::size_t i = 0; i < in.folders.size(); ++i) r << (i ? ", " : "") << "`" << in.folders[i] << "`";
+  r << "\n\nT = " << in.config.run.duration << " s, h = " << in.config.run.time_step * 1e6 << " µs, window ["
+    << in.config.run.duration - in.config.run.window << ", " << in.config.run.duration << "] s, seed "
+    << in.config.seed << ". Runs used: " << in.runs.size() << " of " << in.expected_runs << " listed; bags skipped: "
+    << in.skipped.size() << "; runs missing: " << in.missing.size()
+    << (in.skipped.empty() && in.missing.empty() ? "." : " (see the end of this report and inputs.csv).") << "\n\n";
+  r << "Units as in the paper: δ in mm, δ̇ in mm/s, d in mm·s^-1/2. Intervals are " << pct
+    << ": Wilson score intervals for probabilities, exact distribution-free order-statistic intervals for "
+       "medians. Every number is also in the CSV files beside this report; the figures are drawn from them.\n\n";
+}
+
+// report.md: Center distance d over the window (Figs. 8, 9).
+void md_center_distance(std::ostream& r, const ReportFiles& R) {
+  const BatchAnalysis& a = R.a;
+  const std::string& pct = R.pct;
+  r << "## Center distance d over the window (Figs. 8, 9)\n\n"
+       "Stochastic realizations: box-plot statistics (whiskers min–max as in Fig. 9) and the median with its "
+    << pct << " interval. S1 is the deterministic run, S2 and S3 are realizations 0 and 1. The phase ensemble is "
+       "S1 repeated over 64 initial mesh phases (doc/model.md §6). The paper gives d only at μ = 0.04: "
+       "S1 0.34, S2 0.44, S3 0.59.\n\n";
+  r << "| μ | R | min [mm·s^-1/2] | Q1 [mm·s^-1/2] | median [" << pct << "] [mm·s^-1/2] | Q3 [mm·s^-1/2] | max [mm·s^-1/2] "
+       "| d S1 [mm·s^-1/2] | d S2 | d S3 | phase ensemble median [" << pct << "] (n) [mm·s^-1/2] |\n"
+       "|---|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const MuAnalysis& m : a.mu) {
+    const BoxStats& b = m.center_distance;
+    r << "| " << fixed(m.mu, 2) << " | " << b.n << " | " << fixed(b.min * U, 3) << " | " << fixed(b.q1 * U, 3) << " | "
+      << median_with_interval(b, 3) << " | " << fixed(b.q3 * U, 3) << " | " << fixed(b.max * U, 3) << " | "
+      << (m.s1 ? fixed(m.s1->center_distance * U, 3) : "–") << " | " << fixed(optional_value(m.s2_center_distance) * U, 3)
+      << " | " << fixed(optional_value(m.s3_center_distance) * U, 3) << " | "
+      << median_with_interval(m.phase_center_distance, 3) << " (" << m.phase_runs << ") |\n";
+  }
+}
+
+// report.md: P(d_stoch > d_det), the paper's 93 % statement.
+void md_exceeds(std::ostream& r, const ReportFiles& R) {
+  const BatchAnalysis& a = R.a;
+  const std::string& pct = R.pct;
+  r << "\n## P(d_stoch > d_det) (the paper's 93 % statement)\n\n"
+       "Strict inequality. Against S1 as in the paper, and, because one deterministic trajectory is not "
+       "reproducible pathwise after about 0.1 s (doc/model.md §6), against the median d of the phase ensemble. "
+       "The interval covers the sampling of the realizations only, not the uncertainty of the reference.\n\n";
+  r << "| μ | d > d_S1: k/R | P [" << pct << "] (%) | paper (%) | paper inside? | d > phase median: k/R | P [" << pct
+    << "] (%) |\n|---|---|---|---|---|---|---|\n";
+  for (const MuAnalysis& m : a.mu) {
+    const bool at_paper = std::abs(m.mu - kPaperMuExceeds) < 1e-9;
+    r << "| " << fixed(m.mu, 2) << " | " << m.d_exceeds_s1.successes << "/" << m.d_exceeds_s1.trials << " | "
+      << percent(m.d_exceeds_s1) << " | " << (at_paper ? fixed(100 * kPaperExceedsS1, 0) : "–") << " | "
+      << (at_paper ? inside(kPaperExceedsS1, m.d_exceeds_s1) : "") << " | " << m.d_exceeds_phase_median.successes << "/"
+      << m.d_exceeds_phase_median.trials << " | " << percent(m.d_exceeds_phase_median) << " |\n";
+  }
+}
+
+// report.md: Whether d depends on mu: Kruskal-Wallis and Friedman.
+void md_rank_tests(std::ostream& r, const ReportFiles& R) {
+  const BatchAnalysis& a = R.a;
+  r << "\n## Does d depend on μ?\n\n"
+       "Kruskal–Wallis treats the μ groups as independent samples. The batch uses common random numbers "
+       "(realization r has the same load path at every μ), so Friedman's test blocked by realization is the "
+       "one that matches the design; both are reported. A large p-value means the data do not show a "
+       "difference of d across μ.\n\n"
+       "| test | statistic | df | n | p-value |\n|---|---|---|---|---|\n";
+  for (const auto& [name, t] : {std::pair<const char*, const RankTest&>{"Kruskal–Wallis H", a.kruskal_wallis},
+                                {"Friedman χ² (blocks = realizations)", a.friedman}}) {
+    r << "| " << name << " | " << (t.valid ? fixed(t.statistic, 3) : "–") << " | " << t.df << " | " << t.n << " | ";
+    if (!t.valid) r << "not defined (too few groups or blocks, or all tied)";
+    else if (t.p_value < 1e-4) r << "< 1e-4";
+    else r << fixed(t.p_value, 4);
+    r << " |\n";
+  }
+}
+
+// report.md: Table 3 analogue: the responses at T under the deterministic load.
+void md_table3(std::ostream& r, const ReportFiles& R) {
+  const BatchAnalysis& a = R.a;
+  r << "\n## Table 3 analogue: responses at T under the deterministic load\n\n"
+       "S1's δ(T) and δ̇(T) beside the paper's. A single deterministic trajectory is not reproducible "
+       "pathwise (doc/model.md §6), so the phase ensemble's median and range show what the model supports.\n\n"
+       "| μ | S1 δ(T) [mm] | paper δ [mm] | phase δ(T) median [min, max] [mm] | S1 δ̇(T) [mm/s] | paper δ̇ [mm/s] | "
+       "phase δ̇(T) median [min, max] [mm/s] |\n|---|---|---|---|---|---|---|\n";
+  for (const MuAnalysis& m : a.mu) {
+    const PaperReference* p = paper_at(m.mu);
+    const BoxStats &pd = m.phase_final_delta, &pv = m.phase_final_delta_dot;
+    r << "| " << fixed(m.mu, 2) << " | " << (m.s1 ? fixed(m.s1->final_delta * U, 4) : "–") << " | "
+      << (p ? fixed(p->delta_T, 4) : "–") << " | " << fixed(pd.median * U, 4) << " [" << fixed(pd.min * U, 4) << ", "
+      << fixed(pd.max * U, 4) << "] | " << (m.s1 ? fixed(m.s1->final_delta_dot * U, 3) : "–") << " | "
+      << (p ? fixed(p->delta_dot_T, 3) : "–") << " | " << fixed(pv.median * U, 3) << " [" << fixed(pv.min * U, 3) << ", "
+      << fixed(pv.max * U, 3) << "] |\n";
+  }
+}
+
+// report.md: Table 4 analogue: the probabilities of the safety intervals at T.
+void md_table4(std::ostream& r, const ReportFiles& R) {
+  const BatchAnalysis& a = R.a;
+  const AnalysisSettings& s = R.s;
+  const bool paper_table4 = R.paper_table4;
+  const std::string& pct = R.pct;
+  r << "\n## Table 4 analogue: probabilities of the safety intervals at T (%)\n\n"
+    << "δ(T) ∈ " << interval_text(s.delta_interval, 4) << " mm and δ̇(T) ∈ " << interval_text(s.delta_dot_interval, 1)
+    << " mm/s (closed)"
+    << (paper_table4 ? ", the paper's intervals.\n\n" : "; the paper used [0.04, 0.055] mm and [-16, 16] mm/s, so its values are not shown.\n\n")
+    << "| μ | P(δ ∈) [" << pct << "] (%) | paper (%) | paper inside? | P(δ̇ ∈) [" << pct
+    << "] (%) | paper (%) | paper inside? |\n|---|---|---|---|---|---|---|\n";
+  for (const MuAnalysis& m : a.mu) {
+    const PaperReference* p = paper_table4 ? paper_at(m.mu) : nullptr;
+    r << "| " << fixed(m.mu, 2) << " | " << percent(m.delta_in_interval) << " | " << (p ? fixed(p->p_delta, 0) : "–")
+      << " | " << (p ? inside(p->p_delta / 100, m.delta_in_interval) : "") << " | " << percent(m.delta_dot_in_interval)
+      << " | " << (p ? fixed(p->p_delta_dot, 0) : "–") << " | " << (p ? inside(p->p_delta_dot / 100, m.delta_dot_in_interval) : "")
+      << " |\n";
+  }
+}
+
+// report.md: Time to steady state t_ss.
+void md_steady_state(std::ostream& r, const ReportFiles& R) {
+  const BatchInputs& in = R.in;
+  const BatchAnalysis& a = R.a;
+  const std::string& pct = R.pct;
+  r << "\n## Time to steady state t_ss\n\n"
+       "The last time |δ − b| exceeds " << in.config.run.steady_state_tolerance << "·b (doc/model.md §8). The paper "
+       "reports about 0.35 s for S1 and that S2 and S3 had not settled by 0.4 s.\n\n"
+       "| μ | S1 t_ss [s] | phase median [min, max] [s] | stochastic median [" << pct << "] [s] | stochastic Q1–Q3 [s] "
+       "| P(t_ss < T) [" << pct << "] (%) |\n|---|---|---|---|---|---|\n";
+  for (const MuAnalysis& m : a.mu) {
+    const BoxStats &ps = m.phase_steady_state_time, &st = m.steady_state_time;
+    r << "| " << fixed(m.mu, 2) << " | " << (m.s1 ? fixed(m.s1->steady_state_time, 4) : "–") << " | " << fixed(ps.median, 4)
+      << " [" << fixed(ps.min, 4) << ", " << fixed(ps.max, 4) << "] | "
+      << (st.n ? fixed(st.median, 4) + " [" + fixed(st.median_low, 4) + ", " + fixed(st.median_high, 4) + "]" : "–")
+      << " | " << fixed(st.q1, 4) << "–" << fixed(st.q3, 4) << " | " << percent(m.reached_steady_state) << " |\n";
+  }
+}
+
+// report.md: PDFs at T: the fractions outside the edges (Figs. 10-12).
+void md_pdfs(std::ostream& r, const ReportFiles& R) {
+  const BatchAnalysis& a = R.a;
+  r << "\n## PDFs at T and their joint evolution (Figs. 10–12)\n\n"
+       "Density-normalised histograms, count/(R·width), with doc/model.md's edges; the fraction of the "
+       "realizations outside the edges is not in any bin:\n\n| μ | δ(T) outside (%) | δ̇(T) outside (%) |\n|---|---|---|\n";
+  for (const MuAnalysis& m : a.mu)
+    r << "| " << fixed(m.mu, 2) << " | " << fixed(100 * m.delta_pdf.fraction_outside(), 1) << " | "
+      << fixed(100 * m.delta_dot_pdf.fraction_outside(), 1) << " |\n";
+}
+
+// report.md: The figures' table (Figs. 5-12).
+void md_figures(std::ostream& r) {
+  r << "\n## Figures\n\n"
+       "| paper | figure |\n|---|---|\n"
+       "| Fig. 5 load processes S1, S2, S3 | ![](fig05_load.png) |\n"
+       "| Fig. 6 δ(t) of S1, S2, S3 | ![](fig06_delta.png) |\n"
+       "| Fig. 7 phase portraits on the window | ![](fig07_phase.png) |\n"
+       "| Fig. 8 d of S1, S2, S3 vs μ | ![](fig08_center_distance.png) |\n"
+       "| Fig. 9 box plots of d vs μ | ![](fig09_boxplot.png) |\n"
+       "| Fig. 10 joint PDF evolution | ![](fig10_joint_pdf.png) |\n"
+       "| Fig. 11 PDF of δ(T) | ![](fig11_pdf_delta.png) |\n"
+       "| Fig. 12 PDF of δ̇(T) | ![](fig12_pdf_delta_dot.png) |\n";
+}
+
+// report.md: What was left out (skipped bags, missing runs), if anything.
+void md_left_out(std::ostream& r, const ReportFiles& R) {
+  const BatchInputs& in = R.in;
+  if (!in.skipped.empty() || !in.missing.empty()) {
+    r << "\n## Left out\n\n| item | status | reason |\n|---|---|---|\n";
+    for (const SkippedFile& f : in.skipped) r << "| `" << f.file << "` | skipped | " << f.reason << " |\n";
+    for (const std::string& m : in.missing) r << "| " << m << " | missing | |\n";
+  }
+}
+
+void write_report_md(const ReportFiles& R, const std::string& sections) {
+  const fs::path md = R.dir / "report.md";
+  std::ofstream r(md);
+  if (!r) throw std::runtime_error("cannot write " + md.string());
+  R.written.push_back(md.string());
+  md_heading(r, R);
+  md_center_distance(r, R);
+  md_exceeds(r, R);
+  md_rank_tests(r, R);
+  md_table3(r, R);
+  md_table4(r, R);
+  md_steady_state(r, R);
+  md_pdfs(r, R);
+  r << sections;  // from the layers above: the analyses over time
+  md_figures(r);
+  md_left_out(r, R);
+  r.close();
+  if (!r) throw std::runtime_error("error writing " + md.string());
+}
+
 }  // namespace
 
 const std::vector<PaperReference>& paper_reference() {
@@ -116,253 +480,19 @@ std::vector<std::string> write_report(const std::string& folder, const BatchInpu
   if (ec) throw std::runtime_error("cannot create report folder " + folder + ": " + ec.message());
   std::vector<std::string> written;
   const AnalysisSettings& s = a.settings;
-  const bool paper_table4 = paper_intervals(s);
-  // Row keys: mu for the mu sweep (format 1), else the point and its values.
-  const std::string kh = a.key_header.empty() ? "mu" : a.key_header;
-  const auto key = [&](const MuAnalysis& m) {
-    return a.keys.empty() ? general(m.mu) : a.keys.at(static_cast<std::size_t>(&m - a.mu.data()));
-  };
-
-  {
-    Csv c(dir / "batch.csv", written, "key,value,unit");
-    c.row("duration", in.config.run.duration, "s");
-    c.row("time_step", in.config.run.time_step, "s");
-    c.row("window", in.config.run.window, "s");
-    c.row("seed", in.config.seed, "");
-    c.row("confidence", s.confidence, "");
-    c.row("runs_expected", in.expected_runs, "");
-    c.row("runs_used", in.runs.size(), "");
-    c.row("bags_skipped", in.skipped.size(), "");
-    c.row("missing", in.missing.size(), "");
-  }
-  {
-    Csv c(dir / "runs.csv", written,
-          "name,kind,mu,index,d[mm*s^-1/2],t_ss[s],t_ss_fine[s],reached_steady_state,delta_T[mm],"
-          "delta_dot_T[mm/s],phi_T[mm/s^2]");
-    for (const RunRecord& r : in.runs)
-      c.row(r.name, to_string(r.kind), r.mu, r.index, r.center_distance * U, r.steady_state_time,
-            r.steady_state_time_fine, r.reached_steady_state ? 1 : 0, r.final_delta * U, r.final_delta_dot * U,
-            r.final_phi * U);
-  }
-  {
-    Csv c(dir / "box_stats.csv", written, kh + ",group,quantity,unit," + kBoxHeader);
-    for (const MuAnalysis& m : a.mu) {
-      box_row(c, key(m), "stochastic", "d", "mm*s^-1/2", m.center_distance, U);
-      box_row(c, key(m), "stochastic", "t_ss", "s", m.steady_state_time, 1);
-      box_row(c, key(m), "stochastic", "t_ss_fine", "s", m.steady_state_time_fine, 1);
-      box_row(c, key(m), "stochastic", "delta_T", "mm", m.final_delta, U);
-      box_row(c, key(m), "stochastic", "delta_dot_T", "mm/s", m.final_delta_dot, U);
-      box_row(c, key(m), "phase", "d", "mm*s^-1/2", m.phase_center_distance, U);
-      box_row(c, key(m), "phase", "t_ss", "s", m.phase_steady_state_time, 1);
-      box_row(c, key(m), "phase", "delta_T", "mm", m.phase_final_delta, U);
-      box_row(c, key(m), "phase", "delta_dot_T", "mm/s", m.phase_final_delta_dot, U);
-    }
-  }
-  {
-    Csv c(dir / "probabilities.csv", written,
-          kh + ",quantity,reference,successes,trials,estimate,wilson_low,wilson_high,paper,paper_in_interval");
-    for (const MuAnalysis& m : a.mu) {
-      const PaperReference* p = a.keys.empty() ? paper_at(m.mu) : nullptr;  // a study's points are not the paper's
-      const double nan = std::nan("");
-      const double p93 = p && std::abs(m.mu - kPaperMuExceeds) < 1e-9 ? kPaperExceedsS1 : nan;
-      probability_row(c, key(m), "d>d_S1", m.s1 ? general(m.s1->center_distance * U) + " mm*s^-1/2" : "no S1",
-                      m.d_exceeds_s1, p93);
-      probability_row(c, key(m), "d>median_phase_d", general(m.phase_center_distance.median * U) + " mm*s^-1/2",
-                      m.d_exceeds_phase_median, nan);
-      probability_row(c, key(m), "delta_T_in", interval_text(s.delta_interval, 4) + " mm", m.delta_in_interval,
-                      p && paper_table4 ? p->p_delta / 100 : nan);
-      probability_row(c, key(m), "delta_dot_T_in", interval_text(s.delta_dot_interval, 1) + " mm/s",
-                      m.delta_dot_in_interval, p && paper_table4 ? p->p_delta_dot / 100 : nan);
-      probability_row(c, key(m), "t_ss<T", "T = " + general(in.config.run.duration) + " s", m.reached_steady_state, nan);
-    }
-  }
-  {
-    Csv c(dir / "table3.csv", written,
-          kh + ",s1_delta_T[mm],paper_delta_T[mm],s1_delta_dot_T[mm/s],paper_delta_dot_T[mm/s],s1_d[mm*s^-1/2],"
-          "s2_d[mm*s^-1/2],s3_d[mm*s^-1/2],s1_t_ss[s]");
-    for (const MuAnalysis& m : a.mu) {
-      const PaperReference* p = a.keys.empty() ? paper_at(m.mu) : nullptr;
-      const double nan = std::nan("");
-      c.row(key(m), m.s1 ? m.s1->final_delta * U : nan, p ? p->delta_T : nan, m.s1 ? m.s1->final_delta_dot * U : nan,
-            p ? p->delta_dot_T : nan, m.s1 ? m.s1->center_distance * U : nan, optional_value(m.s2_center_distance) * U,
-            optional_value(m.s3_center_distance) * U, m.s1 ? m.s1->steady_state_time : nan);
-    }
-  }
-  {
-    Csv cd(dir / "pdf_delta.csv", written, kh + ",lo[mm],hi[mm],count,density[1/mm]");
-    Csv cv(dir / "pdf_delta_dot.csv", written, kh + ",lo[mm/s],hi[mm/s],count,density[s/mm]");
-    Csv cj(dir / "joint_pdf.csv", written,
-           kh + ",t[s],delta_lo[mm],delta_hi[mm],delta_dot_lo[mm/s],delta_dot_hi[mm/s],count,density[s/mm^2]");
-    Csv co(dir / "pdf_outside.csv", written, kh + ",quantity,t[s],outside,total,fraction");
-    for (const MuAnalysis& m : a.mu) {
-      for (std::size_t i = 0; i < m.delta_pdf.counts.size(); ++i)
-        cd.row(key(m), m.delta_pdf.edges[i] * U, m.delta_pdf.edges[i + 1] * U, m.delta_pdf.counts[i],
-               m.delta_pdf.density(i) / U);
-      for (std::size_t i = 0; i < m.delta_dot_pdf.counts.size(); ++i)
-        cv.row(key(m), m.delta_dot_pdf.edges[i] * U, m.delta_dot_pdf.edges[i + 1] * U, m.delta_dot_pdf.counts[i],
-               m.delta_dot_pdf.density(i) / U);
-      const double T = in.config.run.duration;
-      co.row(key(m), "delta_T", T, m.delta_pdf.outside, m.delta_pdf.total, m.delta_pdf.fraction_outside());
-      co.row(key(m), "delta_dot_T", T, m.delta_dot_pdf.outside, m.delta_dot_pdf.total, m.delta_dot_pdf.fraction_outside());
-      for (std::size_t k = 0; k < m.joint_pdf.size(); ++k) {
-        const Histogram2D& h = m.joint_pdf[k];
-        const std::size_t ny = h.y_edges.size() - 1;
-        for (std::size_t i = 0; i + 1 < h.x_edges.size(); ++i)
-          for (std::size_t j = 0; j < ny; ++j)
-            cj.row(key(m), s.joint_times[k], h.x_edges[i] * U, h.x_edges[i + 1] * U, h.y_edges[j] * U,
-                   h.y_edges[j + 1] * U, h.counts[i * ny + j], h.density(i, j) / (U * U));
-        co.row(key(m), "joint", s.joint_times[k], h.outside, h.total, h.fraction_outside());
-      }
-    }
-  }
-  {
-    Csv c(dir / "rank_tests.csv", written, "test,statistic,df,n,p_value,valid");
-    c.row("kruskal_wallis", a.kruskal_wallis.statistic, a.kruskal_wallis.df, a.kruskal_wallis.n,
-          a.kruskal_wallis.p_value, a.kruskal_wallis.valid ? 1 : 0);
-    c.row("friedman", a.friedman.statistic, a.friedman.df, a.friedman.n, a.friedman.p_value, a.friedman.valid ? 1 : 0);
-  }
-  {
-    Csv c(dir / "inputs.csv", written, "item,status,reason");
-    for (const SkippedFile& f : in.skipped) c.row(quoted(f.file), "skipped", quoted(f.reason));
-    for (const std::string& m : in.missing) c.row(quoted(m), "missing", "");
-  }
-
+  const ReportFiles files{dir, in, a, s, paper_intervals(s), a.key_header.empty() ? "mu" : a.key_header,
+                          std::to_string(static_cast<int>(std::lround(100 * s.confidence))) + " %", written};
+  write_batch_csv(files);
+  write_runs_csv(files);
+  write_box_stats_csv(files);
+  write_probabilities_csv(files);
+  write_table3_csv(files);
+  write_pdfs_csv(files);
+  write_rank_tests_csv(files);
+  write_inputs_csv(files);
   if (study) write_study_files(folder, in, *study, s, written, sections);
   if (study && study->swept()) return written;  // its report.md is organised by axis
-
-  // ---- report.md ----
-  const fs::path md = dir / "report.md";
-  std::ofstream r(md);
-  if (!r) throw std::runtime_error("cannot write " + md.string());
-  written.push_back(md.string());
-  const std::string pct = std::to_string(static_cast<int>(std::lround(100 * s.confidence))) + " %";
-  r << "# gear_dynamics batch report\n\n";
-  r << "Batch folder(s): ";
-  for (std::size_t i = 0; i < in.folders.size(); ++i) r << (i ? ", " : "") << "`" << in.folders[i] << "`";
-  r << "\n\nT = " << in.config.run.duration << " s, h = " << in.config.run.time_step * 1e6 << " µs, window ["
-    << in.config.run.duration - in.config.run.window << ", " << in.config.run.duration << "] s, seed "
-    << in.config.seed << ". Runs used: " << in.runs.size() << " of " << in.expected_runs << " listed; bags skipped: "
-    << in.skipped.size() << "; runs missing: " << in.missing.size()
-    << (in.skipped.empty() && in.missing.empty() ? "." : " (see the end of this report and inputs.csv).") << "\n\n";
-  r << "Units as in the paper: δ in mm, δ̇ in mm/s, d in mm·s^-1/2. Intervals are " << pct
-    << ": Wilson score intervals for probabilities, exact distribution-free order-statistic intervals for "
-       "medians. Every number is also in the CSV files beside this report; the figures are drawn from them.\n\n";
-
-  r << "## Center distance d over the window (Figs. 8, 9)\n\n"
-       "Stochastic realizations: box-plot statistics (whiskers min–max as in Fig. 9) and the median with its "
-    << pct << " interval. S1 is the deterministic run, S2 and S3 are realizations 0 and 1. The phase ensemble is "
-       "S1 repeated over 64 initial mesh phases (doc/model.md §6). The paper gives d only at μ = 0.04: "
-       "S1 0.34, S2 0.44, S3 0.59.\n\n";
-  r << "| μ | R | min [mm·s^-1/2] | Q1 [mm·s^-1/2] | median [" << pct << "] [mm·s^-1/2] | Q3 [mm·s^-1/2] | max [mm·s^-1/2] "
-       "| d S1 [mm·s^-1/2] | d S2 | d S3 | phase ensemble median [" << pct << "] (n) [mm·s^-1/2] |\n"
-       "|---|---|---|---|---|---|---|---|---|---|---|\n";
-  for (const MuAnalysis& m : a.mu) {
-    const BoxStats& b = m.center_distance;
-    r << "| " << fixed(m.mu, 2) << " | " << b.n << " | " << fixed(b.min * U, 3) << " | " << fixed(b.q1 * U, 3) << " | "
-      << median_with_interval(b, 3) << " | " << fixed(b.q3 * U, 3) << " | " << fixed(b.max * U, 3) << " | "
-      << (m.s1 ? fixed(m.s1->center_distance * U, 3) : "–") << " | " << fixed(optional_value(m.s2_center_distance) * U, 3)
-      << " | " << fixed(optional_value(m.s3_center_distance) * U, 3) << " | "
-      << median_with_interval(m.phase_center_distance, 3) << " (" << m.phase_runs << ") |\n";
-  }
-
-  r << "\n## P(d_stoch > d_det) (the paper's 93 % statement)\n\n"
-       "Strict inequality. Against S1 as in the paper, and, because one deterministic trajectory is not "
-       "reproducible pathwise after about 0.1 s (doc/model.md §6), against the median d of the phase ensemble. "
-       "The interval covers the sampling of the realizations only, not the uncertainty of the reference.\n\n";
-  r << "| μ | d > d_S1: k/R | P [" << pct << "] (%) | paper (%) | paper inside? | d > phase median: k/R | P [" << pct
-    << "] (%) |\n|---|---|---|---|---|---|---|\n";
-  for (const MuAnalysis& m : a.mu) {
-    const bool at_paper = std::abs(m.mu - kPaperMuExceeds) < 1e-9;
-    r << "| " << fixed(m.mu, 2) << " | " << m.d_exceeds_s1.successes << "/" << m.d_exceeds_s1.trials << " | "
-      << percent(m.d_exceeds_s1) << " | " << (at_paper ? fixed(100 * kPaperExceedsS1, 0) : "–") << " | "
-      << (at_paper ? inside(kPaperExceedsS1, m.d_exceeds_s1) : "") << " | " << m.d_exceeds_phase_median.successes << "/"
-      << m.d_exceeds_phase_median.trials << " | " << percent(m.d_exceeds_phase_median) << " |\n";
-  }
-
-  r << "\n## Does d depend on μ?\n\n"
-       "Kruskal–Wallis treats the μ groups as independent samples. The batch uses common random numbers "
-       "(realization r has the same load path at every μ), so Friedman's test blocked by realization is the "
-       "one that matches the design; both are reported. A large p-value means the data do not show a "
-       "difference of d across μ.\n\n"
-       "| test | statistic | df | n | p-value |\n|---|---|---|---|---|\n";
-  for (const auto& [name, t] : {std::pair<const char*, const RankTest&>{"Kruskal–Wallis H", a.kruskal_wallis},
-                                {"Friedman χ² (blocks = realizations)", a.friedman}}) {
-    r << "| " << name << " | " << (t.valid ? fixed(t.statistic, 3) : "–") << " | " << t.df << " | " << t.n << " | ";
-    if (!t.valid) r << "not defined (too few groups or blocks, or all tied)";
-    else if (t.p_value < 1e-4) r << "< 1e-4";
-    else r << fixed(t.p_value, 4);
-    r << " |\n";
-  }
-
-  r << "\n## Table 3 analogue: responses at T under the deterministic load\n\n"
-       "S1's δ(T) and δ̇(T) beside the paper's. A single deterministic trajectory is not reproducible "
-       "pathwise (doc/model.md §6), so the phase ensemble's median and range show what the model supports.\n\n"
-       "| μ | S1 δ(T) [mm] | paper δ [mm] | phase δ(T) median [min, max] [mm] | S1 δ̇(T) [mm/s] | paper δ̇ [mm/s] | "
-       "phase δ̇(T) median [min, max] [mm/s] |\n|---|---|---|---|---|---|---|\n";
-  for (const MuAnalysis& m : a.mu) {
-    const PaperReference* p = paper_at(m.mu);
-    const BoxStats &pd = m.phase_final_delta, &pv = m.phase_final_delta_dot;
-    r << "| " << fixed(m.mu, 2) << " | " << (m.s1 ? fixed(m.s1->final_delta * U, 4) : "–") << " | "
-      << (p ? fixed(p->delta_T, 4) : "–") << " | " << fixed(pd.median * U, 4) << " [" << fixed(pd.min * U, 4) << ", "
-      << fixed(pd.max * U, 4) << "] | " << (m.s1 ? fixed(m.s1->final_delta_dot * U, 3) : "–") << " | "
-      << (p ? fixed(p->delta_dot_T, 3) : "–") << " | " << fixed(pv.median * U, 3) << " [" << fixed(pv.min * U, 3) << ", "
-      << fixed(pv.max * U, 3) << "] |\n";
-  }
-
-  r << "\n## Table 4 analogue: probabilities of the safety intervals at T (%)\n\n"
-    << "δ(T) ∈ " << interval_text(s.delta_interval, 4) << " mm and δ̇(T) ∈ " << interval_text(s.delta_dot_interval, 1)
-    << " mm/s (closed)"
-    << (paper_table4 ? ", the paper's intervals.\n\n" : "; the paper used [0.04, 0.055] mm and [-16, 16] mm/s, so its values are not shown.\n\n")
-    << "| μ | P(δ ∈) [" << pct << "] (%) | paper (%) | paper inside? | P(δ̇ ∈) [" << pct
-    << "] (%) | paper (%) | paper inside? |\n|---|---|---|---|---|---|---|\n";
-  for (const MuAnalysis& m : a.mu) {
-    const PaperReference* p = paper_table4 ? paper_at(m.mu) : nullptr;
-    r << "| " << fixed(m.mu, 2) << " | " << percent(m.delta_in_interval) << " | " << (p ? fixed(p->p_delta, 0) : "–")
-      << " | " << (p ? inside(p->p_delta / 100, m.delta_in_interval) : "") << " | " << percent(m.delta_dot_in_interval)
-      << " | " << (p ? fixed(p->p_delta_dot, 0) : "–") << " | " << (p ? inside(p->p_delta_dot / 100, m.delta_dot_in_interval) : "")
-      << " |\n";
-  }
-
-  r << "\n## Time to steady state t_ss\n\n"
-       "The last time |δ − b| exceeds " << in.config.run.steady_state_tolerance << "·b (doc/model.md §8). The paper "
-       "reports about 0.35 s for S1 and that S2 and S3 had not settled by 0.4 s.\n\n"
-       "| μ | S1 t_ss [s] | phase median [min, max] [s] | stochastic median [" << pct << "] [s] | stochastic Q1–Q3 [s] "
-       "| P(t_ss < T) [" << pct << "] (%) |\n|---|---|---|---|---|---|\n";
-  for (const MuAnalysis& m : a.mu) {
-    const BoxStats &ps = m.phase_steady_state_time, &st = m.steady_state_time;
-    r << "| " << fixed(m.mu, 2) << " | " << (m.s1 ? fixed(m.s1->steady_state_time, 4) : "–") << " | " << fixed(ps.median, 4)
-      << " [" << fixed(ps.min, 4) << ", " << fixed(ps.max, 4) << "] | "
-      << (st.n ? fixed(st.median, 4) + " [" + fixed(st.median_low, 4) + ", " + fixed(st.median_high, 4) + "]" : "–")
-      << " | " << fixed(st.q1, 4) << "–" << fixed(st.q3, 4) << " | " << percent(m.reached_steady_state) << " |\n";
-  }
-
-  r << "\n## PDFs at T and their joint evolution (Figs. 10–12)\n\n"
-       "Density-normalised histograms, count/(R·width), with doc/model.md's edges; the fraction of the "
-       "realizations outside the edges is not in any bin:\n\n| μ | δ(T) outside (%) | δ̇(T) outside (%) |\n|---|---|---|\n";
-  for (const MuAnalysis& m : a.mu)
-    r << "| " << fixed(m.mu, 2) << " | " << fixed(100 * m.delta_pdf.fraction_outside(), 1) << " | "
-      << fixed(100 * m.delta_dot_pdf.fraction_outside(), 1) << " |\n";
-
-  r << sections;
-
-  r << "\n## Figures\n\n"
-       "| paper | figure |\n|---|---|\n"
-       "| Fig. 5 load processes S1, S2, S3 | ![](fig05_load.png) |\n"
-       "| Fig. 6 δ(t) of S1, S2, S3 | ![](fig06_delta.png) |\n"
-       "| Fig. 7 phase portraits on the window | ![](fig07_phase.png) |\n"
-       "| Fig. 8 d of S1, S2, S3 vs μ | ![](fig08_center_distance.png) |\n"
-       "| Fig. 9 box plots of d vs μ | ![](fig09_boxplot.png) |\n"
-       "| Fig. 10 joint PDF evolution | ![](fig10_joint_pdf.png) |\n"
-       "| Fig. 11 PDF of δ(T) | ![](fig11_pdf_delta.png) |\n"
-       "| Fig. 12 PDF of δ̇(T) | ![](fig12_pdf_delta_dot.png) |\n";
-
-  if (!in.skipped.empty() || !in.missing.empty()) {
-    r << "\n## Left out\n\n| item | status | reason |\n|---|---|---|\n";
-    for (const SkippedFile& f : in.skipped) r << "| `" << f.file << "` | skipped | " << f.reason << " |\n";
-    for (const std::string& m : in.missing) r << "| " << m << " | missing | |\n";
-  }
-  r.close();
-  if (!r) throw std::runtime_error("error writing " + md.string());
+  write_report_md(files, sections);
   return written;
 }
 
