@@ -621,12 +621,8 @@ RunRecord check_run(BagRead& read, const ManifestRun& e, const Manifest& manifes
   return r;
 }
 
-}  // namespace
-
-BatchInputs read_batches(const std::vector<std::string>& folder_args, const ReadOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
-  BatchInputs in;
-  // The folders, each once.
+// The folders named, each once (canonical paths, in the order given).
+std::vector<fs::path> distinct_folders(const std::vector<std::string>& folder_args) {
   std::vector<fs::path> folders;
   for (const std::string& f : folder_args) {
     std::error_code ec;
@@ -635,12 +631,28 @@ BatchInputs read_batches(const std::vector<std::string>& folder_args, const Read
     if (std::find(folders.begin(), folders.end(), canonical) == folders.end()) folders.push_back(canonical);
   }
   if (folders.empty()) throw BatchReadError("no batch folder given");
-  for (const auto& f : folders) in.folders.push_back(f.string());
+  return folders;
+}
 
-  // Manifests: one batch (one model configuration), runs listed by name.
+// Each run listed in a manifest, by name, with the manifest that listed it first.
+using Listed = std::map<std::string, std::pair<ManifestRun, const Manifest*>>;
+
+// The folders' manifests, checked to be one batch (one model configuration, format, grid and
+// monte_carlo content), the runs they list, and the shards seen (shard_count -> indices).
+// Not copyable: `listed` points into `manifests`.
+struct Listing {
   std::vector<Manifest> manifests;
-  std::map<std::string, std::pair<ManifestRun, const Manifest*>> listed;
-  std::map<int, std::set<int>> shards;  // shard_count -> indices seen
+  Listed listed;
+  std::map<int, std::set<int>> shards;
+  Listing() = default;
+  Listing(const Listing&) = delete;
+  Listing& operator=(const Listing&) = delete;
+};
+
+void list_runs(const std::vector<fs::path>& folders, Listing& listing) {
+  std::vector<Manifest>& manifests = listing.manifests;
+  Listed& listed = listing.listed;
+  std::map<int, std::set<int>>& shards = listing.shards;
   for (const fs::path& folder : folders) {
     const auto paths = manifests_in(folder);
     if (paths.empty())
@@ -668,8 +680,13 @@ BatchInputs read_batches(const std::vector<std::string>& folder_args, const Read
                              " and " + m.path.string());
     }
   }
-  in.config = manifests.front().config;
-  in.expected_runs = listed.size();
+}
+
+// The batch's axes and points: a study's from its manifest, a mu sweep's (format 1) one point per
+// mu, ascending as its report; each listed run gets its point.
+void set_points(BatchInputs& in, Listing& listing) {
+  const std::vector<Manifest>& manifests = listing.manifests;
+  Listed& listed = listing.listed;
   if (manifests.front().study) {
     for (std::size_t a = 0; a < manifests.front().axes.size(); ++a) {
       SweepAxis axis{manifests.front().axes[a], {}};
@@ -686,19 +703,25 @@ BatchInputs read_batches(const std::vector<std::string>& folder_args, const Read
     for (auto& [name, entry] : listed)
       entry.first.point = static_cast<std::size_t>(std::distance(mus.begin(), mus.find(entry.first.mu)));
   }
+}
+
+// A shard none of whose manifests was found is reported as missing.
+void note_missing_shards(BatchInputs& in, const std::map<int, std::set<int>>& shards) {
   for (const auto& [count, seen] : shards)
     for (int i = 0; i < count; ++i)
       if (!seen.count(i)) {
         in.missing.push_back("shard " + std::to_string(i) + " of " + std::to_string(count) + " (no manifest found)");
         ROS_WARN("batch: shard %d of %d has no manifest in the folders given; its runs are not counted", i, count);
       }
+}
 
-  const auto skip = [&](const fs::path& file, const std::string& reason) {
-    ROS_WARN("batch: skipping %s: %s", file.c_str(), reason.c_str());
-    in.skipped.push_back({file.string(), reason});
-  };
+void skip(BatchInputs& in, const fs::path& file, const std::string& reason) {
+  ROS_WARN("batch: skipping %s: %s", file.c_str(), reason.c_str());
+  in.skipped.push_back({file.string(), reason});
+}
 
-  // Files no manifest accounts for.
+// Files no manifest accounts for: unfinished bags and bags not listed.
+void skip_unlisted(BatchInputs& in, const std::vector<fs::path>& folders, const Listed& listed) {
   std::set<fs::path> referenced;
   for (const auto& [name, entry] : listed)
     for (const fs::path& folder : folders) referenced.insert(folder / entry.first.file);
@@ -708,26 +731,22 @@ BatchInputs read_batches(const std::vector<std::string>& folder_args, const Read
       const auto ends = [&](const std::string& suffix) {
         return name.size() >= suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
       };
-      if (ends(".bag.active")) skip(f.path(), "unfinished (.active): the run was in flight or abandoned");
-      else if (ends(".bag") && !referenced.count(f.path())) skip(f.path(), "not listed in any manifest of the batch");
+      if (ends(".bag.active")) skip(in, f.path(), "unfinished (.active): the run was in flight or abandoned");
+      else if (ends(".bag") && !referenced.count(f.path())) skip(in, f.path(), "not listed in any manifest of the batch");
     }
+}
 
-  std::ofstream series;
-  if (!options.series_csv.empty()) {
-    series.open(options.series_csv);
-    if (!series) throw BatchReadError("cannot write " + options.series_csv);
-    series << "run,kind,mu,index,t[s],delta[mm],delta_dot[mm/s],phi[mm/s^2]\n";
-  }
-  // Each listed run's bag in every folder that has it: the first usable one is used, the later ones
-  // are duplicates. Rounds: each reads the next bag of every run still without a usable one.
-  struct Candidate {
-    fs::path folder, file;
-    bool tried = false;
-    std::optional<RunRecord> record;
-    std::string rows, reason;  // the file holding its series rows (if any), or why it is not usable
-  };
-  std::map<std::string, std::vector<Candidate>> candidates;
-  ParametersCache parameters;
+// A listed run's bag in one folder: the first usable one is used, the later ones are duplicates.
+struct Candidate {
+  fs::path folder, file;
+  bool tried = false;
+  std::optional<RunRecord> record;
+  std::string rows, reason;  // the file holding its series rows (if any), or why it is not usable
+};
+using Candidates = std::map<std::string, std::vector<Candidate>>;
+
+Candidates candidates_of(const Listed& listed, const std::vector<fs::path>& folders) {
+  Candidates candidates;
   for (const auto& [name, entry] : listed)
     for (const fs::path& folder : folders)
       if (fs::exists(folder / entry.first.file)) {
@@ -736,13 +755,21 @@ BatchInputs read_batches(const std::vector<std::string>& folder_args, const Read
         c.file = folder / entry.first.file;
         candidates[name].push_back(std::move(c));
       }
+  return candidates;
+}
+
+// Reads the candidates in rounds: each reads the next bag of every run still without a usable one,
+// until none is left to try. series_wanted: series.csv is written (options.series_csv).
+void read_candidates(BatchInputs& in, Candidates& candidates, const Listed& listed, const ReadOptions& options,
+                     bool series_wanted) {
+  ParametersCache parameters;
   for (;;) {
     std::vector<BagJob> jobs;
     std::vector<std::pair<Candidate*, const std::pair<ManifestRun, const Manifest*>*>> round;
     for (auto& [name, list] : candidates) {
       const auto& entry = listed.at(name);
       const ManifestRun& e = entry.first;
-      const bool wants_series = series.is_open() && same(e.mu, options.series_mu) &&
+      const bool wants_series = series_wanted && same(e.mu, options.series_mu) &&
                                 (e.kind == RunKind::S1 || (e.kind == RunKind::Stochastic && e.realization <= 1));
       for (Candidate& c : list) {
         if (c.record) break;
@@ -784,12 +811,18 @@ BatchInputs read_batches(const std::vector<std::string>& folder_args, const Read
       c.reason = reads[i].error;  // unreadable: no contents came
     }
   }
+}
+
+// The runs used, in the listed order (their series rows appended to series.csv), the skipped
+// duplicates and unusable bags, and the runs with no usable bag; throws if a folder gave nothing.
+void choose_runs(BatchInputs& in, Candidates& candidates, const Listed& listed, const std::vector<fs::path>& folders,
+                 std::ofstream& series, const std::string& series_csv) {
   std::map<fs::path, std::size_t> usable;  // runs each folder provides
   for (const auto& [name, entry] : listed) {
     std::string used;
     for (Candidate& c : candidates[name]) {
       if (!used.empty()) {  // the folder still contributes this run
-        skip(c.file, "duplicate of " + used + " (not read)");
+        skip(in, c.file, "duplicate of " + used + " (not read)");
         ++usable[c.folder];
       } else if (c.record) {
         in.runs.push_back(std::move(*c.record));
@@ -800,7 +833,7 @@ BatchInputs read_batches(const std::vector<std::string>& folder_args, const Read
           fs::remove(c.rows);
         }
       } else {
-        skip(c.file, c.reason);
+        skip(in, c.file, c.reason);
       }
     }
     if (used.empty()) {
@@ -810,13 +843,38 @@ BatchInputs read_batches(const std::vector<std::string>& folder_args, const Read
   }
   if (series.is_open()) {
     series.close();
-    if (!series) throw BatchReadError("error writing " + options.series_csv);
+    if (!series) throw BatchReadError("error writing " + series_csv);
   }
   for (const fs::path& folder : folders)
     if (!usable[folder])
       throw BatchReadError("batch folder '" + folder.string() + "' has no usable bag (" +
                            std::to_string(in.skipped.size()) + " skipped, " + std::to_string(in.missing.size()) +
                            " runs missing)");
+}
+
+}  // namespace
+
+BatchInputs read_batches(const std::vector<std::string>& folder_args, const ReadOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  BatchInputs in;
+  const std::vector<fs::path> folders = distinct_folders(folder_args);
+  for (const auto& f : folders) in.folders.push_back(f.string());
+  Listing listing;
+  list_runs(folders, listing);
+  in.config = listing.manifests.front().config;
+  in.expected_runs = listing.listed.size();
+  set_points(in, listing);
+  note_missing_shards(in, listing.shards);
+  skip_unlisted(in, folders, listing.listed);
+  std::ofstream series;
+  if (!options.series_csv.empty()) {
+    series.open(options.series_csv);
+    if (!series) throw BatchReadError("cannot write " + options.series_csv);
+    series << "run,kind,mu,index,t[s],delta[mm],delta_dot[mm/s],phi[mm/s^2]\n";
+  }
+  Candidates candidates = candidates_of(listing.listed, folders);
+  read_candidates(in, candidates, listing.listed, options, series.is_open());
+  choose_runs(in, candidates, listing.listed, folders, series, options.series_csv);
   ROS_INFO("batch: %zu of %zu runs read from %zu folder(s) in %.2f s; %zu bags skipped, %zu missing (runs or shards)",
            in.runs.size(), in.expected_runs, folders.size(),
            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), in.skipped.size(),
