@@ -105,22 +105,37 @@ struct ReportFiles {
   const BatchInputs& in;
   const BatchAnalysis& a;
   const AnalysisSettings& s;
-  bool paper_table4;       // the paper's Table 4 applies (its own intervals)
-  std::string key_header;  // row keys: mu for the mu sweep (format 1), else the point and its values
-  std::string pct;         // the confidence, "95 %"
+  bool paper_table4;  // the paper's Table 4 applies (its own intervals)
+  std::string kh;     // row keys: mu for the mu sweep (format 1), else the point and its values
+  std::string pct;    // the confidence, "95 %"
   std::vector<std::string>& written;
 
   std::string key(const MuAnalysis& m) const {
     return a.keys.empty() ? general(m.mu) : a.keys.at(static_cast<std::size_t>(&m - a.mu.data()));
   }
+
+  void write_batch_csv() const;
+  void write_runs_csv() const;
+  void write_box_stats_csv() const;
+  void write_probabilities_csv() const;
+  void write_table3_csv() const;
+  void write_pdfs_csv() const;
+  void write_rank_tests_csv() const;
+  void write_inputs_csv() const;
+  void md_heading(std::ostream& r) const;
+  void md_center_distance(std::ostream& r) const;
+  void md_exceeds(std::ostream& r) const;
+  void md_rank_tests(std::ostream& r) const;
+  void md_table3(std::ostream& r) const;
+  void md_table4(std::ostream& r) const;
+  void md_steady_state(std::ostream& r) const;
+  void md_pdfs(std::ostream& r) const;
+  void md_figures(std::ostream& r) const;
+  void md_left_out(std::ostream& r) const;
 };
 
 // batch.csv: the batch's settings and how many runs it used.
-void write_batch_csv(const ReportFiles& R) {
-  const BatchInputs& in = R.in;
-  const AnalysisSettings& s = R.s;
-  const fs::path& dir = R.dir;
-  std::vector<std::string>& written = R.written;
+void ReportFiles::write_batch_csv() const {
   Csv c(dir / "batch.csv", written, "key,value,unit");
   c.row("duration", in.config.run.duration, "s");
   c.row("time_step", in.config.run.time_step, "s");
@@ -134,10 +149,7 @@ void write_batch_csv(const ReportFiles& R) {
 }
 
 // runs.csv: one row per run used.
-void write_runs_csv(const ReportFiles& R) {
-  const BatchInputs& in = R.in;
-  const fs::path& dir = R.dir;
-  std::vector<std::string>& written = R.written;
+void ReportFiles::write_runs_csv() const {
   Csv c(dir / "runs.csv", written,
         "name,kind,mu,index,d[mm*s^-1/2],t_ss[s],t_ss_fine[s],reached_steady_state,delta_T[mm],"
         "delta_dot_T[mm/s],phi_T[mm/s^2]");
@@ -148,12 +160,7 @@ void write_runs_csv(const ReportFiles& R) {
 }
 
 // box_stats.csv: the box statistics of every quantity per group.
-void write_box_stats_csv(const ReportFiles& R) {
-  const BatchAnalysis& a = R.a;
-  const fs::path& dir = R.dir;
-  std::vector<std::string>& written = R.written;
-  const std::string& kh = R.key_header;
-  const auto key = [&R](const MuAnalysis& m) { return R.key(m); };
+void ReportFiles::write_box_stats_csv() const {
   Csv c(dir / "box_stats.csv", written, kh + ",group,quantity,unit," + kBoxHeader);
   for (const MuAnalysis& m : a.mu) {
     box_row(c, key(m), "stochastic", "d", "mm*s^-1/2", m.center_distance, U);
@@ -169,15 +176,7 @@ void write_box_stats_csv(const ReportFiles& R) {
 }
 
 // probabilities.csv: the Wilson intervals, with the paper's values where it has them.
-void write_probabilities_csv(const ReportFiles& R) {
-  const BatchInputs& in = R.in;
-  const BatchAnalysis& a = R.a;
-  const AnalysisSettings& s = R.s;
-  const fs::path& dir = R.dir;
-  std::vector<std::string>& written = R.written;
-  const std::string& kh = R.key_header;
-  const auto key = [&R](const MuAnalysis& m) { return R.key(m); };
-  const bool paper_table4 = R.paper_table4;
+void ReportFiles::write_probabilities_csv() const {
   Csv c(dir / "probabilities.csv", written,
         kh + ",quantity,reference,successes,trials,estimate,wilson_low,wilson_high,paper,paper_in_interval");
   for (const MuAnalysis& m : a.mu) {
@@ -197,12 +196,7 @@ void write_probabilities_csv(const ReportFiles& R) {
 }
 
 // table3.csv: S1, S2, S3 beside the paper's Table 3.
-void write_table3_csv(const ReportFiles& R) {
-  const BatchAnalysis& a = R.a;
-  const fs::path& dir = R.dir;
-  std::vector<std::string>& written = R.written;
-  const std::string& kh = R.key_header;
-  const auto key = [&R](const MuAnalysis& m) { return R.key(m); };
+void ReportFiles::write_table3_csv() const {
   Csv c(dir / "table3.csv", written,
         kh + ",s1_delta_T[mm],paper_delta_T[mm],s1_delta_dot_T[mm/s],paper_delta_dot_T[mm/s],s1_d[mm*s^-1/2],"
         "s2_d[mm*s^-1/2],s3_d[mm*s^-1/2],s1_t_ss[s]");
@@ -216,14 +210,7 @@ void write_table3_csv(const ReportFiles& R) {
 }
 
 // pdf_delta.csv, pdf_delta_dot.csv, joint_pdf.csv, pdf_outside.csv: the histograms at T and over time.
-void write_pdfs_csv(const ReportFiles& R) {
-  const BatchInputs& in = R.in;
-  const BatchAnalysis& a = R.a;
-  const AnalysisSettings& s = R.s;
-  const fs::path& dir = R.dir;
-  std::vector<std::string>& written = R.written;
-  const std::string& kh = R.key_header;
-  const auto key = [&R](const MuAnalysis& m) { return R.key(m); };
+void ReportFiles::write_pdfs_csv() const {
   Csv cd(dir / "pdf_delta.csv", written, kh + ",lo[mm],hi[mm],count,density[1/mm]");
   Csv cv(dir / "pdf_delta_dot.csv", written, kh + ",lo[mm/s],hi[mm/s],count,density[s/mm]");
   Csv cj(dir / "joint_pdf.csv", written,
@@ -252,10 +239,7 @@ void write_pdfs_csv(const ReportFiles& R) {
 }
 
 // rank_tests.csv: Kruskal-Wallis and Friedman across the groups.
-void write_rank_tests_csv(const ReportFiles& R) {
-  const BatchAnalysis& a = R.a;
-  const fs::path& dir = R.dir;
-  std::vector<std::string>& written = R.written;
+void ReportFiles::write_rank_tests_csv() const {
   Csv c(dir / "rank_tests.csv", written, "test,statistic,df,n,p_value,valid");
   c.row("kruskal_wallis", a.kruskal_wallis.statistic, a.kruskal_wallis.df, a.kruskal_wallis.n,
         a.kruskal_wallis.p_value, a.kruskal_wallis.valid ? 1 : 0);
@@ -263,19 +247,14 @@ void write_rank_tests_csv(const ReportFiles& R) {
 }
 
 // inputs.csv: the bags skipped and the runs missing.
-void write_inputs_csv(const ReportFiles& R) {
-  const BatchInputs& in = R.in;
-  const fs::path& dir = R.dir;
-  std::vector<std::string>& written = R.written;
+void ReportFiles::write_inputs_csv() const {
   Csv c(dir / "inputs.csv", written, "item,status,reason");
   for (const SkippedFile& f : in.skipped) c.row(quoted(f.file), "skipped", quoted(f.reason));
   for (const std::string& m : in.missing) c.row(quoted(m), "missing", "");
 }
 
 // report.md: The heading: folders, settings, runs used, units.
-void md_heading(std::ostream& r, const ReportFiles& R) {
-  const BatchInputs& in = R.in;
-  const std::string& pct = R.pct;
+void ReportFiles::md_heading(std::ostream& r) const {
   r << "# gear_dynamics batch report\n\n";
   r << "Batch folder(s): ";
   for (std::size_t i = 0; i < in.folders.size(); ++i) r << (i ? ", " : "") << "`" << in.folders[i] << "`";
@@ -290,9 +269,7 @@ void md_heading(std::ostream& r, const ReportFiles& R) {
 }
 
 // report.md: Center distance d over the window (Figs. 8, 9).
-void md_center_distance(std::ostream& r, const ReportFiles& R) {
-  const BatchAnalysis& a = R.a;
-  const std::string& pct = R.pct;
+void ReportFiles::md_center_distance(std::ostream& r) const {
   r << "## Center distance d over the window (Figs. 8, 9)\n\n"
        "Stochastic realizations: box-plot statistics (whiskers min–max as in Fig. 9) and the median with its "
     << pct << " interval. S1 is the deterministic run, S2 and S3 are realizations 0 and 1. The phase ensemble is "
@@ -312,9 +289,7 @@ void md_center_distance(std::ostream& r, const ReportFiles& R) {
 }
 
 // report.md: P(d_stoch > d_det), the paper's 93 % statement.
-void md_exceeds(std::ostream& r, const ReportFiles& R) {
-  const BatchAnalysis& a = R.a;
-  const std::string& pct = R.pct;
+void ReportFiles::md_exceeds(std::ostream& r) const {
   r << "\n## P(d_stoch > d_det) (the paper's 93 % statement)\n\n"
        "Strict inequality. Against S1 as in the paper, and, because one deterministic trajectory is not "
        "reproducible pathwise after about 0.1 s (doc/model.md §6), against the median d of the phase ensemble. "
@@ -331,8 +306,7 @@ void md_exceeds(std::ostream& r, const ReportFiles& R) {
 }
 
 // report.md: Whether d depends on mu: Kruskal-Wallis and Friedman.
-void md_rank_tests(std::ostream& r, const ReportFiles& R) {
-  const BatchAnalysis& a = R.a;
+void ReportFiles::md_rank_tests(std::ostream& r) const {
   r << "\n## Does d depend on μ?\n\n"
        "Kruskal–Wallis treats the μ groups as independent samples. The batch uses common random numbers "
        "(realization r has the same load path at every μ), so Friedman's test blocked by realization is the "
@@ -350,8 +324,7 @@ void md_rank_tests(std::ostream& r, const ReportFiles& R) {
 }
 
 // report.md: Table 3 analogue: the responses at T under the deterministic load.
-void md_table3(std::ostream& r, const ReportFiles& R) {
-  const BatchAnalysis& a = R.a;
+void ReportFiles::md_table3(std::ostream& r) const {
   r << "\n## Table 3 analogue: responses at T under the deterministic load\n\n"
        "S1's δ(T) and δ̇(T) beside the paper's. A single deterministic trajectory is not reproducible "
        "pathwise (doc/model.md §6), so the phase ensemble's median and range show what the model supports.\n\n"
@@ -369,11 +342,7 @@ void md_table3(std::ostream& r, const ReportFiles& R) {
 }
 
 // report.md: Table 4 analogue: the probabilities of the safety intervals at T.
-void md_table4(std::ostream& r, const ReportFiles& R) {
-  const BatchAnalysis& a = R.a;
-  const AnalysisSettings& s = R.s;
-  const bool paper_table4 = R.paper_table4;
-  const std::string& pct = R.pct;
+void ReportFiles::md_table4(std::ostream& r) const {
   r << "\n## Table 4 analogue: probabilities of the safety intervals at T (%)\n\n"
     << "δ(T) ∈ " << interval_text(s.delta_interval, 4) << " mm and δ̇(T) ∈ " << interval_text(s.delta_dot_interval, 1)
     << " mm/s (closed)"
@@ -390,10 +359,7 @@ void md_table4(std::ostream& r, const ReportFiles& R) {
 }
 
 // report.md: Time to steady state t_ss.
-void md_steady_state(std::ostream& r, const ReportFiles& R) {
-  const BatchInputs& in = R.in;
-  const BatchAnalysis& a = R.a;
-  const std::string& pct = R.pct;
+void ReportFiles::md_steady_state(std::ostream& r) const {
   r << "\n## Time to steady state t_ss\n\n"
        "The last time |δ − b| exceeds " << in.config.run.steady_state_tolerance << "·b (doc/model.md §8). The paper "
        "reports about 0.35 s for S1 and that S2 and S3 had not settled by 0.4 s.\n\n"
@@ -409,8 +375,7 @@ void md_steady_state(std::ostream& r, const ReportFiles& R) {
 }
 
 // report.md: PDFs at T: the fractions outside the edges (Figs. 10-12).
-void md_pdfs(std::ostream& r, const ReportFiles& R) {
-  const BatchAnalysis& a = R.a;
+void ReportFiles::md_pdfs(std::ostream& r) const {
   r << "\n## PDFs at T and their joint evolution (Figs. 10–12)\n\n"
        "Density-normalised histograms, count/(R·width), with doc/model.md's edges; the fraction of the "
        "realizations outside the edges is not in any bin:\n\n| μ | δ(T) outside (%) | δ̇(T) outside (%) |\n|---|---|---|\n";
@@ -420,7 +385,7 @@ void md_pdfs(std::ostream& r, const ReportFiles& R) {
 }
 
 // report.md: The figures' table (Figs. 5-12).
-void md_figures(std::ostream& r) {
+void ReportFiles::md_figures(std::ostream& r) const {
   r << "\n## Figures\n\n"
        "| paper | figure |\n|---|---|\n"
        "| Fig. 5 load processes S1, S2, S3 | ![](fig05_load.png) |\n"
@@ -434,8 +399,7 @@ void md_figures(std::ostream& r) {
 }
 
 // report.md: What was left out (skipped bags, missing runs), if anything.
-void md_left_out(std::ostream& r, const ReportFiles& R) {
-  const BatchInputs& in = R.in;
+void ReportFiles::md_left_out(std::ostream& r) const {
   if (!in.skipped.empty() || !in.missing.empty()) {
     r << "\n## Left out\n\n| item | status | reason |\n|---|---|---|\n";
     for (const SkippedFile& f : in.skipped) r << "| `" << f.file << "` | skipped | " << f.reason << " |\n";
@@ -448,17 +412,17 @@ void write_report_md(const ReportFiles& R, const std::string& sections) {
   std::ofstream r(md);
   if (!r) throw std::runtime_error("cannot write " + md.string());
   R.written.push_back(md.string());
-  md_heading(r, R);
-  md_center_distance(r, R);
-  md_exceeds(r, R);
-  md_rank_tests(r, R);
-  md_table3(r, R);
-  md_table4(r, R);
-  md_steady_state(r, R);
-  md_pdfs(r, R);
+  R.md_heading(r);
+  R.md_center_distance(r);
+  R.md_exceeds(r);
+  R.md_rank_tests(r);
+  R.md_table3(r);
+  R.md_table4(r);
+  R.md_steady_state(r);
+  R.md_pdfs(r);
   r << sections;  // from the layers above: the analyses over time
-  md_figures(r);
-  md_left_out(r, R);
+  R.md_figures(r);
+  R.md_left_out(r);
   r.close();
   if (!r) throw std::runtime_error("error writing " + md.string());
 }
@@ -482,14 +446,14 @@ std::vector<std::string> write_report(const std::string& folder, const BatchInpu
   const AnalysisSettings& s = a.settings;
   const ReportFiles files{dir, in, a, s, paper_intervals(s), a.key_header.empty() ? "mu" : a.key_header,
                           std::to_string(static_cast<int>(std::lround(100 * s.confidence))) + " %", written};
-  write_batch_csv(files);
-  write_runs_csv(files);
-  write_box_stats_csv(files);
-  write_probabilities_csv(files);
-  write_table3_csv(files);
-  write_pdfs_csv(files);
-  write_rank_tests_csv(files);
-  write_inputs_csv(files);
+  files.write_batch_csv();
+  files.write_runs_csv();
+  files.write_box_stats_csv();
+  files.write_probabilities_csv();
+  files.write_table3_csv();
+  files.write_pdfs_csv();
+  files.write_rank_tests_csv();
+  files.write_inputs_csv();
   if (study) write_study_files(folder, in, *study, s, written, sections);
   if (study && study->swept()) return written;  // its report.md is organised by axis
   write_report_md(files, sections);

@@ -174,24 +174,30 @@ struct OverTimeFiles {
   const BatchAnalysis& a;
   const BatchOverTime& o;
   const AnalysisSettings& s;
-  std::string key_header;         // row keys: mu for the mu sweep (format 1), else the point and its values
-  std::string head;               // the key column's heading in report.md
-  std::string pct;                // the confidence, "95 %"
-  std::string delta_interval;     // the safe set's intervals as report.md prints them
-  std::string velocity_interval;
+  std::string kh;      // row keys: mu for the mu sweep (format 1), else the point and its values
+  std::string head;    // the key column's heading in report.md
+  std::string pct;     // the confidence, "95 %"
+  std::string di, vi;  // the safe set's intervals (delta, delta_dot) as report.md prints them
   std::vector<std::string>& written;
 
   std::string key(std::size_t i) const { return a.keys.empty() ? general(a.mu[i].mu) : a.keys[i]; }
   std::string label(std::size_t i) const { return a.keys.empty() ? fixed(a.mu[i].mu, 2) : a.keys[i]; }
+
+  void write_safety_csv() const;
+  void write_first_passage_csv() const;
+  void write_spectrum_csv() const;
+  void write_poincare_csv() const;
+  void write_kde_csv() const;
+  void md_safety(std::ostream& r) const;
+  void md_first_passage(std::ostream& r) const;
+  void md_spectrum(std::ostream& r) const;
+  void md_kde(std::ostream& r) const;
+  void md_poincare(std::ostream& r) const;
+  void md_notes(std::ostream& r) const;
 };
 
 // safety_over_time.csv: P(both intervals) and each alone at every common recorded time.
-void write_safety_csv(const OverTimeFiles& R) {
-  const BatchOverTime& o = R.o;
-  const fs::path& dir = R.dir;
-  std::vector<std::string>& written = R.written;
-  const std::string& kh = R.key_header;
-  const auto key = [&R](std::size_t i) { return R.key(i); };
+void OverTimeFiles::write_safety_csv() const {
   CsvFile c(dir / "safety_over_time.csv", written,
             kh + ",t[s],quantity,successes,trials,estimate,wilson_low,wilson_high");
   for (std::size_t i = 0; i < o.groups.size(); ++i) {
@@ -205,13 +211,7 @@ void write_safety_csv(const OverTimeFiles& R) {
 }
 
 // first_passage.csv, survival.csv: each realization's first passage and the Kaplan-Meier curve.
-void write_first_passage_csv(const OverTimeFiles& R) {
-  const BatchOverTime& o = R.o;
-  const AnalysisSettings& s = R.s;
-  const fs::path& dir = R.dir;
-  std::vector<std::string>& written = R.written;
-  const std::string& kh = R.key_header;
-  const auto key = [&R](std::size_t i) { return R.key(i); };
+void OverTimeFiles::write_first_passage_csv() const {
   CsvFile fp(dir / "first_passage.csv", written, kh + ",realization,t[s],event");
   CsvFile km(dir / "survival.csv", written, kh + ",t[s],at_risk,events,survival,low,high");
   for (std::size_t i = 0; i < o.groups.size(); ++i) {
@@ -230,12 +230,7 @@ void write_first_passage_csv(const OverTimeFiles& R) {
 }
 
 // spectrum_band.csv, spectrum_peaks.csv, spectrum_info.csv: the mean Welch PSD of delta, its lines, its settings.
-void write_spectrum_csv(const OverTimeFiles& R) {
-  const BatchOverTime& o = R.o;
-  const fs::path& dir = R.dir;
-  std::vector<std::string>& written = R.written;
-  const std::string& kh = R.key_header;
-  const auto key = [&R](std::size_t i) { return R.key(i); };
+void OverTimeFiles::write_spectrum_csv() const {
   const double U2 = U * U;
   CsvFile band(dir / "spectrum_band.csv", written,
                kh + ",f[Hz],mean[mm^2/Hz],mean_low[mm^2/Hz],mean_high[mm^2/Hz],run_low[mm^2/Hz],run_high[mm^2/Hz]");
@@ -261,12 +256,7 @@ void write_spectrum_csv(const OverTimeFiles& R) {
 }
 
 // poincare.csv: the phase ensemble's Poincare points.
-void write_poincare_csv(const OverTimeFiles& R) {
-  const BatchOverTime& o = R.o;
-  const fs::path& dir = R.dir;
-  std::vector<std::string>& written = R.written;
-  const std::string& kh = R.key_header;
-  const auto key = [&R](std::size_t i) { return R.key(i); };
+void OverTimeFiles::write_poincare_csv() const {
   CsvFile c(dir / "poincare.csv", written, kh + ",phase,t[s],delta[mm],delta_dot[mm/s]");
   for (std::size_t i = 0; i < o.groups.size(); ++i) {
     if (!o.groups[i].section) continue;
@@ -278,13 +268,7 @@ void write_poincare_csv(const OverTimeFiles& R) {
 }
 
 // kde.csv: the kernel density estimates of delta(T) and delta_dot(T), if analysis.kde.
-void write_kde_csv(const OverTimeFiles& R) {
-  const BatchOverTime& o = R.o;
-  const AnalysisSettings& s = R.s;
-  const fs::path& dir = R.dir;
-  std::vector<std::string>& written = R.written;
-  const std::string& kh = R.key_header;
-  const auto key = [&R](std::size_t i) { return R.key(i); };
+void OverTimeFiles::write_kde_csv() const {
   if (!s.kde) return;
   CsvFile c(dir / "kde.csv", written, kh + ",quantity,unit,bandwidth,x,density");
   for (std::size_t i = 0; i < o.groups.size(); ++i)
@@ -298,14 +282,7 @@ void write_kde_csv(const OverTimeFiles& R) {
 }
 
 // report.md: Safety over time: P(both) at the snapshot times.
-void md_safety(std::ostream& r, const OverTimeFiles& R) {
-  const BatchInputs& in = R.in;
-  const BatchOverTime& o = R.o;
-  const auto label = [&R](std::size_t i) { return R.label(i); };
-  const std::string& head = R.head;
-  const std::string& pct = R.pct;
-  const std::string& di = R.delta_interval;
-  const std::string& vi = R.velocity_interval;
+void OverTimeFiles::md_safety(std::ostream& r) const {
   // Columns of the safety table: the snapshot times on the common grid, so t = T is among them.
   std::vector<double> times;
   for (double t : in.config.run.snapshot_times)
@@ -337,12 +314,7 @@ void md_safety(std::ostream& r, const OverTimeFiles& R) {
 }
 
 // report.md: First passage out of the safe set, Kaplan-Meier survival.
-void md_first_passage(std::ostream& r, const OverTimeFiles& R) {
-  const BatchOverTime& o = R.o;
-  const AnalysisSettings& s = R.s;
-  const auto label = [&R](std::size_t i) { return R.label(i); };
-  const std::string& head = R.head;
-  const std::string& pct = R.pct;
+void OverTimeFiles::md_first_passage(std::ostream& r) const {
   r << "\n## First passage out of the safe set\n\n"
        "Per realization, the first recorded time t ≥ " << general(s.first_passage_settle, 6) << " s "
        "(`analysis.first_passage_settle`, after the start-up) at which (δ, δ̇) is outside the safe set above; a "
@@ -375,12 +347,7 @@ void md_first_passage(std::ostream& r, const OverTimeFiles& R) {
 }
 
 // report.md: Spectrum of delta: the mean Welch PSD's harmonics.
-void md_spectrum(std::ostream& r, const OverTimeFiles& R) {
-  const BatchOverTime& o = R.o;
-  const AnalysisSettings& s = R.s;
-  const auto label = [&R](std::size_t i) { return R.label(i); };
-  const std::string& head = R.head;
-  const std::string& pct = R.pct;
+void OverTimeFiles::md_spectrum(std::ostream& r) const {
   r << "\n## Spectrum of δ (doc/nonlinear-dynamics.md §2)\n\n"
        "Mean one-sided Welch PSD of δ over the realizations with a dense series (S2, S3, … at "
        "`monte_carlo.record_rate`), after t = " << general(s.spectrum_transient, 6) << " s (`analysis.spectrum_transient`): "
@@ -411,12 +378,7 @@ void md_spectrum(std::ostream& r, const OverTimeFiles& R) {
 }
 
 // report.md: Kernel density estimates beside Figs. 11 and 12, if analysis.kde.
-void md_kde(std::ostream& r, const OverTimeFiles& R) {
-  const BatchAnalysis& a = R.a;
-  const BatchOverTime& o = R.o;
-  const AnalysisSettings& s = R.s;
-  const auto label = [&R](std::size_t i) { return R.label(i); };
-  const std::string& head = R.head;
+void OverTimeFiles::md_kde(std::ostream& r) const {
   if (s.kde) {
     r << "\n## Kernel density estimates beside Figs. 11 and 12 (doc/nonlinear-dynamics.md §7)\n\n"
          "Gaussian kernel, bandwidth by Silverman's rule of thumb h = 0.9·min(sd, IQR/1.34)·n^(−1/5) (kde.csv), "
@@ -430,11 +392,7 @@ void md_kde(std::ostream& r, const OverTimeFiles& R) {
 }
 
 // report.md: Poincare section of the phase ensemble.
-void md_poincare(std::ostream& r, const OverTimeFiles& R) {
-  const BatchOverTime& o = R.o;
-  const AnalysisSettings& s = R.s;
-  const auto label = [&R](std::size_t i) { return R.label(i); };
-  const std::string& head = R.head;
+void OverTimeFiles::md_poincare(std::ostream& r) const {
   r << "\n## Poincaré section of the phase ensemble (doc/nonlinear-dynamics.md §3)\n\n"
        "(δ, δ̇) of every phase run (φ0 = j·φn/64) at mesh phase 0 once per mesh period T_m, as the batch recorded them "
        "(`/gear/poincare`, doc/batch-folder.md §5: grid states where t_k = (φn − φ0)/Ω + k·T_m is on the integration "
@@ -460,8 +418,7 @@ void md_poincare(std::ostream& r, const OverTimeFiles& R) {
 }
 
 // report.md: What was not computed, and why.
-void md_notes(std::ostream& r, const OverTimeFiles& R) {
-  const BatchOverTime& o = R.o;
+void OverTimeFiles::md_notes(std::ostream& r) const {
   if (!o.notes.empty()) {
     r << "\nNot computed:\n\n";
     for (const std::string& n : o.notes) r << "- " << n << "\n";
@@ -637,18 +594,18 @@ std::string write_over_time(const std::string& folder, const BatchInputs& in, co
       dir, in, a, o, s, kh, head, std::to_string(static_cast<int>(std::lround(100 * s.confidence))) + " %",
       "[" + fixed(s.delta_interval.lo * U, 4) + ", " + fixed(s.delta_interval.hi * U, 4) + "] mm",
       "[" + fixed(s.delta_dot_interval.lo * U, 1) + ", " + fixed(s.delta_dot_interval.hi * U, 1) + "] mm/s", written};
-  write_safety_csv(files);
-  write_first_passage_csv(files);
-  write_spectrum_csv(files);
-  write_poincare_csv(files);
-  write_kde_csv(files);
+  files.write_safety_csv();
+  files.write_first_passage_csv();
+  files.write_spectrum_csv();
+  files.write_poincare_csv();
+  files.write_kde_csv();
   std::ostringstream r;
-  md_safety(r, files);
-  md_first_passage(r, files);
-  md_spectrum(r, files);
-  md_kde(r, files);
-  md_poincare(r, files);
-  md_notes(r, files);
+  files.md_safety(r);
+  files.md_first_passage(r);
+  files.md_spectrum(r);
+  files.md_kde(r);
+  files.md_poincare(r);
+  files.md_notes(r);
   return r.str();
 }
 
