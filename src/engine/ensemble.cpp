@@ -106,8 +106,8 @@ void Ensemble::step() {
   Packet sum = Packet::Zero();  // NaN and inf propagate through it: one finiteness test per step
 
   // N lanes at a time: N = 4 kPacket (a default block of 32 lanes) runs four packets' dependency
-  // chains side by side in each statement (the kernel is latency-bound; four were 4 % faster than
-  // two on 2026-12-01), what is left two packets or one at a time.
+  // chains side by side in each statement (the kernel is latency-bound: more chains hide more of
+  // it), what is left two packets or one at a time.
   const auto step_lanes = [&](auto lanes, Eigen::Index p) GD_KERNEL_INLINE_LAMBDA {
     constexpr int N = decltype(lanes)::value;
     using Lanes = Eigen::Array<double, N, 1>;

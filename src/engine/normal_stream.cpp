@@ -3,6 +3,8 @@
 #include <boost/random/normal_distribution.hpp>
 
 #include <algorithm>
+#include <stdexcept>
+#include <string>
 
 // The instruction-set variant of the generator's SIMD parts, chosen once here; each file provides
 // the same interface (Words and its operations, ziggurat_fast, first_retry_words, simd_wedge) and
@@ -78,9 +80,11 @@ void slow_normals(const std::uint16_t* rejects, int count, Add add) {
 NormalStream::NormalStream(std::uint64_t seed, std::uint64_t realization)
     : key_{static_cast<std::uint32_t>(realization), static_cast<std::uint32_t>(seed)},
       seed_high_(static_cast<std::uint32_t>(seed >> 32)) {
-  // The high realization bits share the counter word with the seed's high bits; 2^32
-  // realizations per seed are far beyond any batch.
-  seed_high_ ^= static_cast<std::uint32_t>(realization >> 32) * 0x9E3779B9u;
+  // The key holds 32 bits of the realization: a higher index would share its stream with another
+  // (seed, realization) pair.
+  if (realization >> 32)
+    throw std::invalid_argument("NormalStream: realization " + std::to_string(realization) +
+                                " is out of range; allowed [0, 4294967295] (32 bits of the stream key)");
 }
 
 void NormalStream::philox(std::uint64_t first_pair, std::uint64_t* w0, std::uint64_t* w1) const {

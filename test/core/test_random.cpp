@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <Random123/philox.h>
@@ -25,7 +27,7 @@ class ReferenceStream {
  public:
   ReferenceStream(std::uint64_t seed, std::uint64_t r)
       : key_{{static_cast<std::uint32_t>(r), static_cast<std::uint32_t>(seed)}},
-        seed_high_(static_cast<std::uint32_t>(seed >> 32) ^ static_cast<std::uint32_t>(r >> 32) * 0x9E3779B9u) {}
+        seed_high_(static_cast<std::uint32_t>(seed >> 32)) {}
 
   // Word j of counter (p, p >> 32, seed_high, c3): out[1]:out[0] for j = 0, out[3]:out[2] for j = 1.
   std::uint64_t word(std::uint64_t p, std::uint32_t c3, int j) const {
@@ -130,16 +132,15 @@ gd::LaneSpec stochastic(std::uint64_t r, double mu) {
 }  // namespace
 
 // The SIMD Philox is Random123's Philox4x32-10, bit for bit, on the counters and keys of doc/model.md's
-// (seed, realization) scheme, including high seed and realization bits.
+// (seed, realization) scheme, including high seed bits and the highest realization.
 TEST(NormalStream, PhiloxMatchesRandom123) {
   for (const std::uint64_t seed : {20180529ull, 0x123456789ABCDEFull}) {
-    for (const std::uint64_t r : {0ull, 99ull, (1ull << 33) + 5}) {
+    for (const std::uint64_t r : {0ull, 99ull, (1ull << 32) - 1}) {
       const gd::NormalStream s(seed, r);
       for (const std::uint64_t first : {0ull, 64ull, (1ull << 32) - 16}) {
         std::uint64_t w0[gd::NormalStream::kBlockPairs], w1[gd::NormalStream::kBlockPairs];
         s.philox(first, w0, w1);
-        const std::uint32_t seed_high =
-            static_cast<std::uint32_t>(seed >> 32) ^ static_cast<std::uint32_t>(r >> 32) * 0x9E3779B9u;
+        const std::uint32_t seed_high = static_cast<std::uint32_t>(seed >> 32);
         for (int i = 0; i < gd::NormalStream::kBlockPairs; ++i) {
           const std::uint64_t p = first + i;
           const r123::Philox4x32::ctr_type ctr = {
@@ -156,14 +157,14 @@ TEST(NormalStream, PhiloxMatchesRandom123) {
 }
 
 // The normals are Boost.Random's ziggurat (normal_distribution<double>(0, 1)) on each normal's own
-// Philox words, bit for bit, with high seed and realization bits too, over enough normals that
+// Philox words, bit for bit, with high seed bits and the highest realization too, over enough normals that
 // the SIMD fast path's rejects take all of Boost's slow paths: the wedges, the tail beyond
 // x_1 = 3.44, and retries past the first retry counter.
 TEST(NormalStream, IsBoostsZigguratOnItsPhiloxWords) {
   SlowPathCount slow;
   long normals = 0;
   for (const std::uint64_t seed : {20180529ull, 0x123456789ABCDEFull}) {
-    for (const std::uint64_t r : {0ull, 99ull, (1ull << 33) + 5}) {
+    for (const std::uint64_t r : {0ull, 99ull, (1ull << 32) - 1}) {
       const gd::NormalStream s(seed, r);
       const ReferenceStream reference(seed, r);
       for (const std::uint64_t first : {0ull, (1ull << 33) - 64}) {  // counters with high bits too
@@ -203,7 +204,7 @@ TEST(NormalLanes, EachLaneIsItsRealizationsStream) {
   constexpr int kLanes = gd::NormalLanes::kLanes, kBlock = 2 * gd::NormalLanes::kBlockPairs;
   SlowPathCount slow;
   for (const std::uint64_t seed : {20180529ull, 0x123456789ABCDEFull}) {
-    const std::uint64_t realizations[kLanes] = {0, 7, 3, (1ull << 33) + 5, 99, 1, 1000000, 2};
+    const std::uint64_t realizations[kLanes] = {0, 7, 3, (1ull << 32) - 1, 99, 1, 1000000, 2};
     const gd::NormalLanes lanes(seed, realizations);
     for (const std::uint64_t start : {0ull, (1ull << 32) - 32 * 64}) {
       for (std::uint64_t first_pair = start; first_pair < start + 32 * 64; first_pair += 32) {
@@ -417,5 +418,20 @@ TEST(Ensemble, DivergenceStopsWithLaneAndTime) {
     EXPECT_EQ(err.realization, 3u);
     EXPECT_GT(err.time, 0.0);
     EXPECT_NE(std::string(err.what()).find("realization 3"), std::string::npos);
+  }
+}
+
+// The key holds 32 bits of the realization; a higher index would repeat another pair's stream
+// ((s, r) and (s ^ (0x9E3779B9 << 32), r + 2^32) shared one when the high bits went into the
+// counter), so it is refused with its value and the range.
+TEST(NormalStream, RefusesRealizationsBeyondTheKey) {
+  EXPECT_NO_THROW(gd::NormalStream(1, (1ull << 32) - 1));
+  try {
+    gd::NormalStream(1, 1ull << 32);
+    FAIL() << "realization 2^32 was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("realization 4294967296 is out of range; allowed [0, 4294967295]"),
+              std::string::npos)
+        << e.what();
   }
 }

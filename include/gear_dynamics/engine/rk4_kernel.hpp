@@ -21,7 +21,7 @@
 #include "gear_dynamics/model/mesh_schedule.hpp"
 
 // The kernel is inlined into each stepping loop (GCC otherwise calls the packet version once per
-// packet, with d and v through memory: 4 % slower).
+// packet, with d and v through memory).
 #define GD_KERNEL_INLINE inline __attribute__((always_inline))
 #define GD_KERNEL_INLINE_LAMBDA __attribute__((always_inline))
 
