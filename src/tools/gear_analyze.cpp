@@ -71,7 +71,7 @@ Options parse(int argc, char** argv) {
                   "95 % band); mesh harmonics and sidebands marked");
   add_valued(*spectrum, o, "realizations", "R", "stochastic realizations (default 0)");
   add_valued(*spectrum, o, "transient", "S", "start-up dropped [s] (default 0.1)");
-  add_valued(*spectrum, o, "decimate", "K", "sample every K steps (default 10)");
+  add_valued(*spectrum, o, "decimate", "K", "sample every K steps (default: the steps of 10 us, f_s = 100 kHz)");
   add_valued(*spectrum, o, "segment", "L", "Welch segment in samples (default 30 mesh periods)");
   add_valued(*spectrum, o, "overlap", "F", "segment overlap (default 0.5)");
   add_valued(*spectrum, o, "harmonics", "N", "mesh harmonics marked (default 6)");
@@ -170,8 +170,11 @@ int spectrum(const Options& o) {
   const gd::GearPair g = gd::derive(c.gear);
   const int R = static_cast<int>(o.get("realizations", 0));
   const double transient = o.get("transient", 0.1);
-  const int k = static_cast<int>(o.get("decimate", 10));
-  const double h = c.run.time_step, fs = 1.0 / (k * h), fm = 1.0 / gd::mesh_period(g);
+  const double h = c.run.time_step;
+  // 100 kHz by default whatever the step: the mesh force jumps at the switches, so its spectrum
+  // folds back from above Nyquist, and a coarser grid would fold more.
+  const int k = static_cast<int>(o.get("decimate", std::max(1.0, std::round(1e-5 / h))));
+  const double fs = 1.0 / (k * h), fm = 1.0 / gd::mesh_period(g);
   // Default segment: 30 mesh periods, so that every mesh harmonic falls on a bin centre.
   const double seg_default = std::round(30.0 * gd::mesh_period(g) * fs);
   gd::WelchOptions w{static_cast<std::size_t>(o.get("segment", seg_default)), o.get("overlap", 0.5)};
