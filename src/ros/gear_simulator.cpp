@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "gear_dynamics/ros/conversions.hpp"
+#include "gear_dynamics/ros/stop_signal.hpp"
 
 namespace gear_dynamics {
 
@@ -147,6 +148,9 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
 
 GearSimulator::~GearSimulator() {
   if (sim_) sim_->stop();
+  if (sim_ && stop_signal() != 0)
+    log_at_stop(StopLog::Info, std::string("gear_simulator: stopped by ") + stop_signal_name() + " at t = " +
+                                   seconds(sim_->status().time));
   record_close();
 }
 
