@@ -8,6 +8,7 @@
 #include <ctime>
 #include <sys/stat.h>
 #include <numeric>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -31,6 +32,12 @@ constexpr auto kClockInterval = std::chrono::milliseconds(5);
 // machine) a burst ends after this many publish instants or this much wall time.
 constexpr std::size_t kBurst = 64;
 constexpr auto kBurstWall = std::chrono::milliseconds(1);
+// At real_time_factor 0 the messages sent to subscribers (state, state_batch, the Float64 topics)
+// are paced to at most this many per wall second, in all and per topic: rosbag record queues 100
+// messages per topic, so a topic at 2000/s survives a 50 ms stall of the recorder
+// (doc/gear_simulator.md §3.2). Without subscribers: full speed.
+constexpr double kFullSpeedMessageRate = 4000.0;
+constexpr double kFullSpeedTopicRate = 2000.0;
 
 SimulatorSettings load_settings(const ros::NodeHandle& nh, double time_step) {
   return parse_simulator_settings(yaml_from_parameters(nh, {"simulator"}), time_step);
@@ -73,6 +80,7 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
       reconfigure_server_(reconfigure_mutex_, private_nh),
       updater_(nh, private_nh) {
   state_ = CountedPublisher::advertise<GearState>(nh_, "state", kQueue);
+  state_batch_ = CountedPublisher::advertise<GearStateBatch>(nh_, "state_batch", kQueue);
   if (settings_.publish_scalars) {
     delta_ = CountedPublisher::advertise<std_msgs::Float64>(nh_, "delta", kQueue);
     delta_dot_ = CountedPublisher::advertise<std_msgs::Float64>(nh_, "delta_dot", kQueue);
@@ -92,6 +100,7 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
   const SpectrumSampling spectrum = spectrum_sampling(settings_, config_.run.time_step);
   if (spectrum.enabled()) spectrum_ = std::make_unique<SpectrumPublisher>(nh_, spectrum);
   held_.reserve(5 * kBurst + 5);
+  batch_.states.reserve(kBurst + 2);
   // Publishes t = 0 and the run info at once.
   sim_.emplace(config_, settings_, static_cast<LiveSink&>(*this));
 
@@ -140,10 +149,21 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
              static_cast<long long>(spectrum.segment_samples), fs / static_cast<double>(spectrum.segment_samples),
              spectrum.overlap, derive(config_.gear).mesh_frequency());
   }
+  if (settings_.real_time_factor == 0.0) warn_full_speed();
   if (settings_.load_input != "sde")
     ROS_INFO("gear_simulator: load input '%s' from %s (std_msgs/Float64, m/s^2), applied at the next step",
              settings_.load_input.c_str(), load_sub_.getTopic().c_str());
   sim_->start();
+}
+
+void GearSimulator::warn_full_speed() const {
+  ROS_WARN("gear_simulator: real_time_factor 0: while %s, %s or a Float64 topic has a subscriber, at most %g "
+           "messages per wall second go out (rosbag record -a keeps up); a subscriber slower than that loses "
+           "messages (roscpp drops its oldest; gaps in header.seq show it). Every state at full speed: subscribe "
+           "to %s alone (up to %zu states per message), started before the node runs (paused:=true, then "
+           "~unpause); or record:=true, the node's own bag",
+           state_.topic.c_str(), state_batch_.topic.c_str(), kFullSpeedMessageRate, state_batch_.topic.c_str(),
+           kBurst);
 }
 
 GearSimulator::~GearSimulator() {
@@ -222,6 +242,7 @@ void GearSimulator::reconfigure(SimulatorConfig& config, uint32_t /*level*/) {
   if (config.real_time_factor != dynamic_.real_time_factor) r.real_time_factor = config.real_time_factor;
   if (config.publish_rate != dynamic_.publish_rate) r.publish_rate = config.publish_rate;
   if (r.mu || r.sigma || r.drift || r.real_time_factor || r.publish_rate) {
+    if (r.real_time_factor && *r.real_time_factor == 0.0) warn_full_speed();
     sim_->request(r);  // returns once applied; a refused value (e.g. sigma without noise) is not
     // The server answers with `config`: it shows what is in effect, as LiveSimulation decided.
     const LiveSimulation::Status in_effect = sim_->status();
@@ -239,6 +260,7 @@ bool GearSimulator::pause(std_srvs::Empty::Request&, std_srvs::Empty::Response&)
 }
 
 bool GearSimulator::unpause(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
+  resend_start_ = true;
   Request r;
   r.paused = false;
   return sim_->request(r).ok;
@@ -251,6 +273,7 @@ bool GearSimulator::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&)
 }
 
 bool GearSimulator::step(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+  resend_start_ = true;
   Request r;
   r.step = true;
   const LiveSimulation::Outcome o = sim_->request(r);
@@ -312,19 +335,29 @@ void GearSimulator::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) 
 // ---- LiveSink (stepping thread) ----
 
 bool GearSimulator::wants_center_distance() const {
-  return !record_prefix_.empty() || state_.wanted() || (settings_.publish_scalars && center_distance_.wanted());
+  return !record_prefix_.empty() || state_.wanted() || state_batch_.wanted() ||
+         (settings_.publish_scalars && center_distance_.wanted());
 }
 
 void GearSimulator::publish(const LiveSample& s) {
   // One clock read per publish instant, for the /clock throttle and the burst's age.
   const auto now = std::chrono::steady_clock::now();
   publish_clock(now, s.t, false);
-  const bool recording = !record_prefix_.empty();
   if (held_.empty()) held_since_ = now;
-  if (recording || state_.wanted()) {
-    held_.push_back(Held{&state_, make_state(s), {}});
+  if (resend_start_.exchange(false) && unsent_start_ && s.step > 0) hold(*unsent_start_, false);
+  unsent_start_.reset();
+  hold(s, true);
+  if (std::exchange(first_publish_, false) && settings_.paused) unsent_start_ = s;
+  if (held_.size() >= kBurst || now - held_since_ >= kBurstWall) flush();
+}
+
+void GearSimulator::hold(const LiveSample& s, bool record_it) {
+  ++instants_held_;
+  const bool recording = record_it && !record_prefix_.empty();
+  if (recording || state_.wanted() || state_batch_.wanted()) {
+    held_.push_back(Held{&state_, make_state(s), {}, state_.wanted()});
     const GearState& m = held_.back().state;
-    record(state_.topic, m.header.stamp, m);
+    if (recording) record(state_.topic, m.header.stamp, m);
   }
   if (settings_.publish_scalars) {
     const ros::Time stamp = sim_stamp(s.t);
@@ -332,24 +365,52 @@ void GearSimulator::publish(const LiveSample& s) {
       if (!recording && !p.wanted()) return;
       held_.push_back(Held{&p, {}, {}});
       held_.back().scalar.data = value;
-      record(p.topic, stamp, held_.back().scalar);
+      if (recording) record(p.topic, stamp, held_.back().scalar);
     };
     scalar(delta_, s.delta);
     scalar(delta_dot_, s.delta_dot);
     scalar(phi_, s.phi);
     scalar(center_distance_, s.center_distance);
   }
-  if (held_.size() >= kBurst || now - held_since_ >= kBurstWall) flush();
 }
 
 void GearSimulator::flush() {
+  const bool batch = state_batch_.wanted();
+  std::size_t sent = 0, states = 0, scalars = 0;
   for (const Held& h : held_) {
-    if (h.pub == &state_)
-      h.pub->pub.publish(h.state);
-    else
+    if (h.pub == &state_) {
+      if (h.send) h.pub->pub.publish(h.state);
+      states += h.send;
+      if (batch) batch_.states.push_back(h.state);
+    } else if (h.pub->wanted()) {
       h.pub->pub.publish(h.scalar);
+      ++scalars;
+    }
   }
   held_.clear();  // keeps the capacity
+  sent = states + scalars;
+  if (!batch_.states.empty()) {
+    batch_.header.stamp = batch_.states.back().header.stamp;
+    state_batch_.pub.publish(batch_);
+    batch_.states.clear();
+    ++sent;
+  }
+  // The busiest topic's count: state's, or a scalar topic's (one per instant held).
+  const std::size_t busiest = std::max<std::size_t>({1, states, scalars > 0 ? instants_held_ : 0});
+  instants_held_ = 0;
+  if (sent > 0 && sim_ && sim_->real_time_factor() == 0.0) pace_messages(sent, busiest);
+}
+
+void GearSimulator::pace_messages(std::size_t sent, std::size_t busiest) {
+  // A budget in wall time: what was sent moves it ahead; the loop sleeps while it is ahead of the
+  // present, and a budget that fell behind (a pause, no subscriber) restarts at now.
+  const auto now = std::chrono::steady_clock::now();
+  if (message_budget_ < now - LiveSimulation::kMaxLag) message_budget_ = now;
+  const double seconds = std::max(static_cast<double>(sent) / kFullSpeedMessageRate,
+                                  static_cast<double>(busiest) / kFullSpeedTopicRate);
+  message_budget_ += std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(seconds));
+  if (message_budget_ - now >= LiveSimulation::kMinWait) std::this_thread::sleep_until(message_budget_);
 }
 
 void GearSimulator::spectrum(const SpectrumSamples& window) {

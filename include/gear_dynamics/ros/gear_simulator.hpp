@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "gear_dynamics/GearState.h"
+#include "gear_dynamics/GearStateBatch.h"
 #include "gear_dynamics/SimulatorConfig.h"
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/config/simulator_settings.hpp"
@@ -81,7 +82,11 @@ class GearSimulator : private LiveSink {
   void idle(const LiveSample& last) override;
   void finished(const LiveSample& last) override;
   bool wants_center_distance() const override;
-  void flush() override;  // publishes the held burst (stepping thread)
+  void flush() override;  // publishes the held burst, and it as one state_batch (stepping thread)
+  // Holds the messages of `s` for the topics that want them; into the bag with `record_it`.
+  void hold(const LiveSample& s, bool record_it);
+  // At real_time_factor 0: sleeps so that the messages sent stay within kFullSpeedMessageRate.
+  void pace_messages(std::size_t sent, std::size_t busiest_topic);
   void spectrum(const SpectrumSamples& window) override;  // hands the window to spectrum_
   // /clock = t + 1 s at wall time `now`, if `always` or kClockInterval after the last one.
   void publish_clock(std::chrono::steady_clock::time_point now, double t, bool always);
@@ -92,6 +97,9 @@ class GearSimulator : private LiveSink {
   void record_close();
   template <class M>
   void record(const std::string& topic, const ros::Time& stamp, const M& msg);
+
+  // At real_time_factor 0: which subscribers can lose messages, and how to get every state.
+  void warn_full_speed() const;
 
   // ---- callbacks (spinner thread) ----
   void load_command(const std_msgs::Float64ConstPtr& m);
@@ -118,9 +126,19 @@ class GearSimulator : private LiveSink {
     const CountedPublisher* pub;
     GearState state;  // pub == &state_
     std_msgs::Float64 scalar;
+    bool send = true;  // false: a state held for state_batch only
   };
   std::vector<Held> held_;
   std::chrono::steady_clock::time_point held_since_;
+  GearStateBatch batch_;  // reused: its vector keeps its capacity
+  std::chrono::steady_clock::time_point message_budget_;  // pace_messages
+  std::size_t instants_held_ = 0;  // publish instants in held_
+  // A run started paused publishes t = 0 before anyone can have subscribed: that sample goes out
+  // again at the first ~unpause or ~step (resend_start_, set by them), so that a recorder started
+  // first gets every state from t = 0.
+  std::optional<LiveSample> unsent_start_;
+  bool first_publish_ = true;
+  std::atomic<bool> resend_start_{false};
 
   // The recording (stepping thread; diagnostics read it).
   std::mutex record_mutex_;
@@ -134,7 +152,7 @@ class GearSimulator : private LiveSink {
   Status last_diagnosis_;
 
   // ROS interfaces (the sink runs on the stepping thread; roscpp publishers are thread-safe).
-  CountedPublisher state_, delta_, delta_dot_, phi_, center_distance_;
+  CountedPublisher state_, state_batch_, delta_, delta_dot_, phi_, center_distance_;
   ros::Publisher clock_pub_, run_info_pub_, final_state_pub_;
   ros::Subscriber load_sub_;
   ros::ServiceServer pause_srv_, unpause_srv_, reset_srv_, step_srv_;
