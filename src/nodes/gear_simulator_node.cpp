@@ -3,8 +3,10 @@
 
 #include "gear_dynamics/ros/gear_simulator.hpp"
 #include "gear_dynamics/ros/stop_signal.hpp"
+#include "gear_dynamics/ros/utf8_console.hpp"
 
 int main(int argc, char** argv) {
+  gear_dynamics::use_utf8_console();
   ros::init(argc, argv, "gear_simulator", ros::init_options::NoSigintHandler);
   // SIGTERM too: roslaunch's second signal, or `kill`, still closes the node's bag.
   gear_dynamics::install_stop_handlers(gear_dynamics::OnSigint::RequestShutdownAlsoSigterm);

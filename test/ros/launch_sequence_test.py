@@ -7,7 +7,8 @@ each launch does what its own arguments say, whatever the launch before it set.
 - monte_carlo.launch study:=noise, then a plain batch: the plain one runs its own 1 point, not the
   study's 6; end_launch ends every launch quietly (no "process has died"), however many earlier
   roslaunch entries the master keeps in /roslaunch/uris.
-- aggregator.launch, then plot:=false: figures only in the first report folder.
+- aggregator.launch, then plot:=false: figures only in the first report folder; the nodes' log
+  lines keep their UTF-8 ("Poincaré", not "Poincar??").
 """
 import glob
 import os
@@ -151,6 +152,8 @@ class LaunchSequence(unittest.TestCase):
             code = launch.wait(180.0)
             self.assertEqual(code, 0, launch.output()[-4000:])
             self.assertNotIn('has died', launch.output())
+            # UTF-8 intact in the log (no phase runs here: the node warns about the section)
+            self.assertIn('Poincaré section', launch.output())
             self.assertTrue(os.path.exists(os.path.join(report, 'report.md')), launch.output()[-4000:])
             figures.append(glob.glob(os.path.join(report, '*.png')))
         self.assertGreater(len(figures[0]), 0)
