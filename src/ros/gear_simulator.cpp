@@ -63,11 +63,16 @@ std::vector<std::pair<std::string, double SimulatorConfig::*>> double_parameters
 void RefusingConfig::__clamp__() {
   // One rule for a bad value, at start and at run time: refused. At start the node ends with a
   // FATAL (ConfigError); here the value in effect stays (NaN marks it for reconfigure()).
+  refused.clear();
   for (const auto& [name, field] : double_parameters()) {
     const double asked = this->*field, lo = __getMin__().*field, hi = __getMax__().*field;
-    if (std::isnan(asked) || (asked >= lo && asked <= hi)) continue;
-    ROS_WARN("dynamic_reconfigure: %s = %g is out of range [%g, %g]: refused, keeping the value in effect",
-             name.c_str(), asked, lo, hi);
+    if (asked >= lo && asked <= hi) continue;
+    char why[160];
+    if (std::isnan(asked))
+      std::snprintf(why, sizeof why, "%s = nan is not a number", name.c_str());
+    else
+      std::snprintf(why, sizeof why, "%s = %g is out of range [%g, %g]", name.c_str(), asked, lo, hi);
+    refused[name] = why;
     this->*field = std::nan("");
   }
 }
@@ -229,10 +234,12 @@ void GearSimulator::load_command(const std_msgs::Float64ConstPtr& m) {
 
 // ---- callbacks ----
 
-void GearSimulator::reconfigure(SimulatorConfig& config, uint32_t /*level*/) {
+void GearSimulator::reconfigure(RefusingConfig& config, uint32_t /*level*/) {
   for (const auto& [name, field] : double_parameters()) {
     if (!std::isnan(config.*field)) continue;
-    ROS_WARN("dynamic_reconfigure: %s = nan or out of range: refused, keeping %g", name.c_str(), dynamic_.*field);
+    const auto why = config.refused.find(name);
+    ROS_WARN("dynamic_reconfigure: %s: refused, keeping %g",
+             why != config.refused.end() ? why->second.c_str() : (name + " = nan").c_str(), dynamic_.*field);
     config.*field = dynamic_.*field;
   }
   Request r;

@@ -14,6 +14,7 @@
 #include <chrono>
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <atomic>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -33,11 +34,13 @@ namespace gear_dynamics {
 
 // The reconfigure server would clamp every request into Simulator.cfg's ranges, silently; with
 // this Config a value out of range (or NaN) is refused with a warning instead, as at start:
-// __clamp__ marks it NaN and GearSimulator::reconfigure keeps the value in effect.
+// __clamp__ marks it NaN and says why in `refused`, and GearSimulator::reconfigure keeps the value
+// in effect and logs one line per refused value.
 struct RefusingConfig : SimulatorConfig {
   RefusingConfig() = default;
   RefusingConfig(const SimulatorConfig& c) : SimulatorConfig(c) {}  // the server converts its defaults
   void __clamp__();
+  std::map<std::string, std::string> refused;  // name -> "mu = 5 is out of range [0, 0.2]"
 };
 
 // A publisher that counts its subscribers through roscpp's connect callbacks: the stepping thread
@@ -103,7 +106,7 @@ class GearSimulator : private LiveSink {
 
   // ---- callbacks (spinner thread) ----
   void load_command(const std_msgs::Float64ConstPtr& m);
-  void reconfigure(SimulatorConfig& config, uint32_t level);
+  void reconfigure(RefusingConfig& config, uint32_t level);
   bool pause(std_srvs::Empty::Request&, std_srvs::Empty::Response&);
   bool unpause(std_srvs::Empty::Request&, std_srvs::Empty::Response&);
   bool reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&);
