@@ -58,6 +58,19 @@ std::vector<std::pair<std::string, double SimulatorConfig::*>> double_parameters
   return out;
 }
 
+// The two gears as joints (doc/gear_simulator.md §3.3): the pinion turns at the constant nominal
+// speed, theta1 = phi0 + Omega t (doc/model.md D3), and delta = Rb1 theta1 - Rb2 theta2 gives the
+// wheel's angle; positive theta2 turns the wheel the way the pinion drives it.
+sensor_msgs::JointState make_joint_state(const LiveSample& s, const GearPair& g) {
+  sensor_msgs::JointState m;
+  m.header.stamp = sim_stamp(s.t);
+  m.name = {"pinion_joint", "wheel_joint"};
+  const double theta1 = g.in.mesh_phase + g.in.pinion_speed * s.t;
+  m.position = {theta1, (g.base_radius1 * theta1 - s.delta) / g.base_radius2};
+  m.velocity = {g.in.pinion_speed, (g.base_radius1 * g.in.pinion_speed - s.delta_dot) / g.base_radius2};
+  return m;
+}
+
 }  // namespace
 
 void RefusingConfig::__clamp__() {
@@ -81,11 +94,13 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
     : nh_(nh),
       private_nh_(private_nh),
       config_(load_model_config(private_nh)),
+      gear_(derive(config_.gear)),
       settings_(load_settings(private_nh, config_.run.time_step)),
       reconfigure_server_(reconfigure_mutex_, private_nh),
       updater_(nh, private_nh) {
   state_ = CountedPublisher::advertise<GearState>(nh_, "state", kQueue);
   state_batch_ = CountedPublisher::advertise<GearStateBatch>(nh_, "state_batch", kQueue);
+  joint_states_ = CountedPublisher::advertise<sensor_msgs::JointState>(nh_, "joint_states", kQueue);
   if (settings_.publish_scalars) {
     delta_ = CountedPublisher::advertise<std_msgs::Float64>(nh_, "delta", kQueue);
     delta_dot_ = CountedPublisher::advertise<std_msgs::Float64>(nh_, "delta_dot", kQueue);
@@ -106,6 +121,7 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
   if (spectrum.enabled()) spectrum_ = std::make_unique<SpectrumPublisher>(nh_, spectrum);
   held_.reserve(5 * kBurst + 5);
   batch_.states.reserve(kBurst + 2);
+  held_joints_.reserve(kBurst + 2);
   // Publishes t = 0 and the run info at once.
   sim_.emplace(config_, settings_, static_cast<LiveSink&>(*this));
 
@@ -162,7 +178,7 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
 }
 
 void GearSimulator::warn_full_speed() const {
-  ROS_WARN("gear_simulator: real_time_factor 0: while %s, %s or a Float64 topic has a subscriber, at most %g "
+  ROS_WARN("gear_simulator: real_time_factor 0: while %s, %s, joint_states or a Float64 topic has a subscriber, at most %g "
            "messages per wall second go out (rosbag record -a keeps up); a subscriber slower than that loses "
            "messages (roscpp drops its oldest; gaps in header.seq show it). Every state at full speed: subscribe "
            "to %s alone (up to %zu states per message), started before the node runs (paused:=true, then "
@@ -366,6 +382,7 @@ void GearSimulator::hold(const LiveSample& s, bool record_it) {
     const GearState& m = held_.back().state;
     if (recording) record(state_.topic, m.header.stamp, m);
   }
+  if (joint_states_.wanted()) held_joints_.push_back(make_joint_state(s, gear_));
   if (settings_.publish_scalars) {
     const ros::Time stamp = sim_stamp(s.t);
     const auto scalar = [&](const CountedPublisher& p, double value) {
@@ -395,6 +412,9 @@ void GearSimulator::flush() {
     }
   }
   held_.clear();  // keeps the capacity
+  for (const sensor_msgs::JointState& j : held_joints_) joint_states_.pub.publish(j);
+  scalars += held_joints_.size();  // one more topic with a message per instant
+  held_joints_.clear();
   sent = states + scalars;
   if (!batch_.states.empty()) {
     batch_.header.stamp = batch_.states.back().header.stamp;

@@ -6,6 +6,7 @@
 
 #include <dynamic_reconfigure/server.h>
 #include <ros/ros.h>
+#include <sensor_msgs/JointState.h>
 #include <std_srvs/Empty.h>
 #include <std_msgs/Float64.h>
 #include <std_srvs/Trigger.h>
@@ -116,6 +117,7 @@ class GearSimulator : private LiveSink {
   // Fixed after construction.
   ros::NodeHandle nh_, private_nh_;
   ModelConfig config_;
+  GearPair gear_;  // derived from config_.gear (joint_states)
   SimulatorSettings settings_;
 
   std::string record_prefix_;  // empty: no recording
@@ -134,6 +136,7 @@ class GearSimulator : private LiveSink {
   std::vector<Held> held_;
   std::chrono::steady_clock::time_point held_since_;
   GearStateBatch batch_;  // reused: its vector keeps its capacity
+  std::vector<sensor_msgs::JointState> held_joints_;  // joint_states of the burst
   std::chrono::steady_clock::time_point message_budget_;  // pace_messages
   std::size_t instants_held_ = 0;  // publish instants in held_
   // A run started paused publishes t = 0 before anyone can have subscribed: that sample goes out
@@ -155,7 +158,7 @@ class GearSimulator : private LiveSink {
   Status last_diagnosis_;
 
   // ROS interfaces (the sink runs on the stepping thread; roscpp publishers are thread-safe).
-  CountedPublisher state_, state_batch_, delta_, delta_dot_, phi_, center_distance_;
+  CountedPublisher state_, state_batch_, joint_states_, delta_, delta_dot_, phi_, center_distance_;
   ros::Publisher clock_pub_, run_info_pub_, final_state_pub_;
   ros::Subscriber load_sub_;
   ros::ServiceServer pause_srv_, unpause_srv_, reset_srv_, step_srv_;
