@@ -38,6 +38,9 @@ constexpr auto kBurstWall = std::chrono::milliseconds(1);
 // (doc/gear_simulator.md §3.2). Without subscribers: full speed.
 constexpr double kFullSpeedMessageRate = 4000.0;
 constexpr double kFullSpeedTopicRate = 2000.0;
+// With an external load input: a running node that got no command for this long [wall s] says so
+// (diagnostics WARN, one log line per silence); Phi stays held.
+constexpr double kLoadCommandTimeout = 1.0;
 
 SimulatorSettings load_settings(const ros::NodeHandle& nh, double time_step) {
   return parse_simulator_settings(yaml_from_parameters(nh, {"simulator"}), time_step);
@@ -143,8 +146,10 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
 
   updater_.setHardwareID("none");
   updater_.add("simulation", this, &GearSimulator::diagnose);
-  diagnostics_timer_ = nh_.createWallTimer(ros::WallDuration(1.0),
-                                           [this](const ros::WallTimerEvent&) { updater_.force_update(); });
+  diagnostics_timer_ = nh_.createWallTimer(ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) {
+    updater_.force_update();
+    if (settings_.publish_clock) check_clock_publishers();
+  });
 
   const std::string load = settings_.deterministic
                                ? "the deterministic load S1"
@@ -244,8 +249,18 @@ void GearSimulator::record(const std::string& topic, const ros::Time& stamp, con
 void GearSimulator::load_command(const std_msgs::Float64ConstPtr& m) {
   const LiveSimulation::Status s = sim_->status();
   const ros::Time now = ros::Time::now();
-  sim_->command_load(m->data, now.toSec());
   record(load_sub_.getTopic(), sim_stamp(s.time), *m);  // received after the state at s.time
+  ++commands_received_;
+  last_command_ = std::chrono::steady_clock::now();
+  silence_warned_ = false;
+  if (!(std::abs(m->data) <= kMaxLoadMean)) {  // NaN and inf too
+    ++commands_refused_;
+    ROS_WARN_THROTTLE(1.0, "load command %g m/s^2 refused: outside [-%g, %g] m/s^2 (the range of load.initial_mean); "
+                      "Phi keeps the command in effect (%llu refused so far)",
+                      m->data, kMaxLoadMean, kMaxLoadMean, static_cast<unsigned long long>(commands_refused_));
+    return;
+  }
+  sim_->command_load(m->data, now.toSec());
 }
 
 // ---- callbacks ----
@@ -305,6 +320,24 @@ bool GearSimulator::step(std_srvs::Trigger::Request&, std_srvs::Trigger::Respons
   return true;
 }
 
+void GearSimulator::check_clock_publishers() {
+  XmlRpc::XmlRpcValue request, response, payload;
+  request[0] = ros::this_node::getName();
+  if (!ros::master::execute("getSystemState", request, response, payload, false)) return;
+  // payload: [publishers, subscribers, services], each a list of [topic, [node, ...]]
+  XmlRpc::XmlRpcValue& publishers = payload[0];
+  for (int i = 0; i < publishers.size(); ++i) {
+    if (static_cast<std::string>(publishers[i][0]) != "/clock") continue;
+    for (int k = 0; k < publishers[i][1].size(); ++k) {
+      const std::string node = publishers[i][1][k];
+      if (node == ros::this_node::getName() || !other_clocks_.insert(node).second) continue;
+      ROS_WARN("gear_simulator: %s publishes /clock too: sim-time nodes then see two time lines, and /clock "
+               "goes back and forth. Only one simulator may own the clock: start the others with "
+               "publish_clock:=false", node.c_str());
+    }
+  }
+}
+
 void GearSimulator::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
   const Status s = sim_->status();
   const double wall = s.running_wall - last_diagnosis_.running_wall;
@@ -334,6 +367,21 @@ void GearSimulator::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) 
   stat.add("lambda [m/s^3]", s.drift);
   stat.add("load input", settings_.load_input);
   stat.add("load commands applied", s.load_commands);
+  if (settings_.load_input != "sde") {
+    // Commands faster than the integration steps are merged (the last one wins): received minus
+    // refused minus applied.
+    stat.add("load commands received", commands_received_);
+    stat.add("load commands refused (out of range)", commands_refused_);
+    const double silent = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_command_).count();
+    stat.add("wall s since the last load command", commands_received_ > 0 ? silent : -1.0);
+    if (s.state == "running" && silent > kLoadCommandTimeout) {
+      stat.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "no load command for %.1f s: Phi held", silent);
+      if (!silence_warned_)
+        ROS_WARN("gear_simulator: no load command on %s for %.1f wall s while running: Phi stays at the last "
+                 "command (or load.initial_mean before the first)", load_sub_.getTopic().c_str(), silent);
+      silence_warned_ = true;
+    }
+  }
   if (spectrum_) {
     const SpectrumPublisher::Stats st = spectrum_->stats();
     stat.add("spectrum: published", st.published);

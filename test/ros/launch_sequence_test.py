@@ -102,13 +102,13 @@ class LaunchSequence(unittest.TestCase):
 
         output, private = self.simulate()
         self.assertNotIn('/gear/gear_simulator/record_prefix', private)
-        self.assertNotIn('record:', output)
+        self.assertNotIn('record: writing', output)
         self.assertEqual(len(os.listdir(folder)), 1, os.listdir(folder))
 
         shutil.rmtree(folder)  # the first launch's folder gone: the plain launch does not care
         output, _ = self.simulate()
         self.assertNotIn('FATAL', output)
-        self.assertNotIn('record:', output)
+        self.assertNotIn('record: writing', output)
 
     def batch(self, folder, *args):
         launch = Launch('monte_carlo.launch', 'output_dir:=' + folder, 'config:=' + self.small, *args)

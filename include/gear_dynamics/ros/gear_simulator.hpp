@@ -19,6 +19,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -113,6 +114,8 @@ class GearSimulator : private LiveSink {
   bool reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&);
   bool step(std_srvs::Trigger::Request&, std_srvs::Trigger::Response&);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat);
+  // With publish_clock: warns once per other node that publishes /clock (the master's state).
+  void check_clock_publishers();
 
   // Fixed after construction.
   ros::NodeHandle nh_, private_nh_;
@@ -155,6 +158,9 @@ class GearSimulator : private LiveSink {
 
   // Spinner thread only.
   SimulatorConfig dynamic_;  // the last configuration handed over
+  std::uint64_t commands_received_ = 0, commands_refused_ = 0;  // load_command
+  std::chrono::steady_clock::time_point last_command_ = std::chrono::steady_clock::now();
+  bool silence_warned_ = false;
   Status last_diagnosis_;
 
   // ROS interfaces (the sink runs on the stepping thread; roscpp publishers are thread-safe).
@@ -166,6 +172,7 @@ class GearSimulator : private LiveSink {
   dynamic_reconfigure::Server<RefusingConfig> reconfigure_server_;
   diagnostic_updater::Updater updater_;
   ros::WallTimer diagnostics_timer_;
+  std::set<std::string> other_clocks_;  // publishers of /clock already warned about
 
   std::unique_ptr<SpectrumPublisher> spectrum_;  // with simulator.spectrum_rate > 0
   std::optional<LiveSimulation> sim_;  // last: publishes through the members above
