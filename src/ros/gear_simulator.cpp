@@ -183,9 +183,9 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
 }
 
 void GearSimulator::warn_full_speed() const {
-  ROS_WARN("gear_simulator: real_time_factor 0: while %s, %s, joint_states or a Float64 topic has a subscriber, at most %g "
-           "messages per wall second go out (rosbag record -a keeps up); a subscriber slower than that loses "
-           "messages (roscpp drops its oldest; gaps in header.seq show it). Every state at full speed: subscribe "
+  ROS_WARN("gear_simulator: real_time_factor 0: while %s, %s, joint_states or a Float64 topic has a subscriber, "
+           "at most %g messages per wall second go out (rosbag record -a keeps up); a subscriber slower than that "
+           "loses messages (roscpp drops its oldest; gaps in header.seq show it). Every state at full speed: subscribe "
            "to %s alone (up to %zu states per message), started before the node runs (paused:=true, then "
            "~unpause); or record:=true, the node's own bag",
            state_.topic.c_str(), state_batch_.topic.c_str(), kFullSpeedMessageRate, state_batch_.topic.c_str(),
