@@ -26,11 +26,16 @@ def parent_is_roslaunch():
 
 
 def parent_server():
-    """The XML-RPC server of the roslaunch whose process is our parent."""
+    """The XML-RPC server of the roslaunch whose process is our parent. A master kept up between
+    launches keeps every earlier roslaunch's entry in /roslaunch/uris (roslaunch never removes it):
+    an entry that does not answer, or answers with another pid, is someone else's."""
     uris = rosgraph.Master(rospy.get_name()).getParam('/roslaunch/uris')
     for uri in uris.values():
         server = xmlrpc.client.ServerProxy(uri)
-        code, _, pid = server.get_pid()
+        try:
+            code, _, pid = server.get_pid()
+        except (OSError, xmlrpc.client.Error):
+            continue
         if code == 1 and pid == os.getppid():
             return server
     return None

@@ -40,7 +40,7 @@ const std::vector<Section<ModelConfig>>& model_sections() {
           .key("initial_deflection", GD_MEMBER(initial.deflection), closed(-1e-2, 1e-2), "m", "delta(0)")
           .key("initial_velocity", GD_MEMBER(initial.velocity), closed(-10, 10), "m/s", "delta_dot(0)"),
       Section<ModelConfig>("load", "load.")
-          .key("initial_mean", GD_MEMBER(load.initial_mean), closed(-1e4, 1e4), "m/s^2",
+          .key("initial_mean", GD_MEMBER(load.initial_mean), closed(-kMaxLoadMean, kMaxLoadMean), "m/s^2",
                "E[Phi(0)]; the deterministic run S1 keeps Phi at this value")
           .key("initial_sd", GD_MEMBER(load.initial_sd), closed(0, 1e4), "m/s^2", "sd of Phi(0), normal")
           .key("drift", GD_MEMBER(load.drift), closed(-kMaxLoadDrift, kMaxLoadDrift), "m/s^3", "lambda, drift of Phi")

@@ -3,8 +3,10 @@
 
 #include "gear_dynamics/ros/aggregator_node.hpp"
 #include "gear_dynamics/ros/stop_signal.hpp"
+#include "gear_dynamics/ros/utf8_console.hpp"
 
 int main(int argc, char** argv) {
+  gear_dynamics::use_utf8_console();
   ros::init(argc, argv, "gear_aggregator", ros::init_options::NoSigintHandler);
   gear_dynamics::install_stop_handlers(gear_dynamics::OnSigint::RequestShutdown);
   ros::NodeHandle private_nh("~");

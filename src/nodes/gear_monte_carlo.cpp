@@ -3,8 +3,10 @@
 
 #include "gear_dynamics/ros/monte_carlo_node.hpp"
 #include "gear_dynamics/ros/stop_signal.hpp"
+#include "gear_dynamics/ros/utf8_console.hpp"
 
 int main(int argc, char** argv) {
+  gear_dynamics::use_utf8_console();
   ros::init(argc, argv, "gear_monte_carlo", ros::init_options::NoSigintHandler);
   // SIGINT and SIGTERM stop the batch cleanly (finished bags kept) instead of shutting ROS down at once.
   gear_dynamics::install_stop_handlers(gear_dynamics::OnSigint::OnlyRemember);

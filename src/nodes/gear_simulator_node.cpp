@@ -3,10 +3,13 @@
 
 #include "gear_dynamics/ros/gear_simulator.hpp"
 #include "gear_dynamics/ros/stop_signal.hpp"
+#include "gear_dynamics/ros/utf8_console.hpp"
 
 int main(int argc, char** argv) {
+  gear_dynamics::use_utf8_console();
   ros::init(argc, argv, "gear_simulator", ros::init_options::NoSigintHandler);
-  gear_dynamics::install_stop_handlers(gear_dynamics::OnSigint::RequestShutdown);
+  // SIGTERM too: roslaunch's second signal, or `kill`, still closes the node's bag.
+  gear_dynamics::install_stop_handlers(gear_dynamics::OnSigint::RequestShutdownAlsoSigterm);
   // Outlive the simulator: when the last NodeHandle goes, roscpp shuts down, logging included.
   ros::NodeHandle nh, private_nh("~");
   gear_dynamics::repeat_early_stop();
@@ -15,7 +18,8 @@ int main(int argc, char** argv) {
     ros::spin();
   } catch (const gear_dynamics::ConfigError& e) {
     if (gear_dynamics::stop_signal() != 0) {  // the parameter reads were cut short, not wrong
-      gear_dynamics::warn_at_stop("gear_simulator: stopped by SIGINT while starting");
+      gear_dynamics::warn_at_stop(std::string("gear_simulator: stopped by ") + gear_dynamics::stop_signal_name() +
+                                  " while starting");
       return 0;
     }
     ROS_FATAL("%s", e.what());

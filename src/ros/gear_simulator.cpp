@@ -8,10 +8,12 @@
 #include <ctime>
 #include <sys/stat.h>
 #include <numeric>
+#include <thread>
 #include <utility>
 #include <vector>
 
 #include "gear_dynamics/ros/conversions.hpp"
+#include "gear_dynamics/ros/stop_signal.hpp"
 
 namespace gear_dynamics {
 
@@ -30,6 +32,15 @@ constexpr auto kClockInterval = std::chrono::milliseconds(5);
 // machine) a burst ends after this many publish instants or this much wall time.
 constexpr std::size_t kBurst = 64;
 constexpr auto kBurstWall = std::chrono::milliseconds(1);
+// At real_time_factor 0 the messages sent to subscribers (state, state_batch, the Float64 topics)
+// are paced to at most this many per wall second, in all and per topic: rosbag record queues 100
+// messages per topic, so a topic at 2000/s survives a 50 ms stall of the recorder
+// (doc/gear_simulator.md §3.2). Without subscribers: full speed.
+constexpr double kFullSpeedMessageRate = 4000.0;
+constexpr double kFullSpeedTopicRate = 2000.0;
+// With an external load input: a running node that got no command for this long [wall s] says so
+// (diagnostics WARN, one log line per silence); Phi stays held.
+constexpr double kLoadCommandTimeout = 1.0;
 
 SimulatorSettings load_settings(const ros::NodeHandle& nh, double time_step) {
   return parse_simulator_settings(yaml_from_parameters(nh, {"simulator"}), time_step);
@@ -50,16 +61,34 @@ std::vector<std::pair<std::string, double SimulatorConfig::*>> double_parameters
   return out;
 }
 
+// The two gears as joints (doc/gear_simulator.md §3.3): the pinion turns at the constant nominal
+// speed, theta1 = phi0 + Omega t (doc/model.md D3), and delta = Rb1 theta1 - Rb2 theta2 gives the
+// wheel's angle; positive theta2 turns the wheel the way the pinion drives it.
+sensor_msgs::JointState make_joint_state(const LiveSample& s, const GearPair& g) {
+  sensor_msgs::JointState m;
+  m.header.stamp = sim_stamp(s.t);
+  m.name = {"pinion_joint", "wheel_joint"};
+  const double theta1 = g.in.mesh_phase + g.in.pinion_speed * s.t;
+  m.position = {theta1, (g.base_radius1 * theta1 - s.delta) / g.base_radius2};
+  m.velocity = {g.in.pinion_speed, (g.base_radius1 * g.in.pinion_speed - s.delta_dot) / g.base_radius2};
+  return m;
+}
+
 }  // namespace
 
 void RefusingConfig::__clamp__() {
   // One rule for a bad value, at start and at run time: refused. At start the node ends with a
   // FATAL (ConfigError); here the value in effect stays (NaN marks it for reconfigure()).
+  refused.clear();
   for (const auto& [name, field] : double_parameters()) {
     const double asked = this->*field, lo = __getMin__().*field, hi = __getMax__().*field;
-    if (std::isnan(asked) || (asked >= lo && asked <= hi)) continue;
-    ROS_WARN("dynamic_reconfigure: %s = %g is out of range [%g, %g]: refused, keeping the value in effect",
-             name.c_str(), asked, lo, hi);
+    if (asked >= lo && asked <= hi) continue;
+    char why[160];
+    if (std::isnan(asked))
+      std::snprintf(why, sizeof why, "%s = nan is not a number", name.c_str());
+    else
+      std::snprintf(why, sizeof why, "%s = %g is out of range [%g, %g]", name.c_str(), asked, lo, hi);
+    refused[name] = why;
     this->*field = std::nan("");
   }
 }
@@ -68,10 +97,13 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
     : nh_(nh),
       private_nh_(private_nh),
       config_(load_model_config(private_nh)),
+      gear_(derive(config_.gear)),
       settings_(load_settings(private_nh, config_.run.time_step)),
       reconfigure_server_(reconfigure_mutex_, private_nh),
       updater_(nh, private_nh) {
   state_ = CountedPublisher::advertise<GearState>(nh_, "state", kQueue);
+  state_batch_ = CountedPublisher::advertise<GearStateBatch>(nh_, "state_batch", kQueue);
+  joint_states_ = CountedPublisher::advertise<sensor_msgs::JointState>(nh_, "joint_states", kQueue);
   if (settings_.publish_scalars) {
     delta_ = CountedPublisher::advertise<std_msgs::Float64>(nh_, "delta", kQueue);
     delta_dot_ = CountedPublisher::advertise<std_msgs::Float64>(nh_, "delta_dot", kQueue);
@@ -91,6 +123,8 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
   const SpectrumSampling spectrum = spectrum_sampling(settings_, config_.run.time_step);
   if (spectrum.enabled()) spectrum_ = std::make_unique<SpectrumPublisher>(nh_, spectrum);
   held_.reserve(5 * kBurst + 5);
+  batch_.states.reserve(kBurst + 2);
+  held_joints_.reserve(kBurst + 2);
   // Publishes t = 0 and the run info at once.
   sim_.emplace(config_, settings_, static_cast<LiveSink&>(*this));
 
@@ -112,8 +146,10 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
 
   updater_.setHardwareID("none");
   updater_.add("simulation", this, &GearSimulator::diagnose);
-  diagnostics_timer_ = nh_.createWallTimer(ros::WallDuration(1.0),
-                                           [this](const ros::WallTimerEvent&) { updater_.force_update(); });
+  diagnostics_timer_ = nh_.createWallTimer(ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) {
+    updater_.force_update();
+    if (settings_.publish_clock) check_clock_publishers();
+  });
 
   const std::string load = settings_.deterministic
                                ? "the deterministic load S1"
@@ -139,14 +175,28 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
              static_cast<long long>(spectrum.segment_samples), fs / static_cast<double>(spectrum.segment_samples),
              spectrum.overlap, derive(config_.gear).mesh_frequency());
   }
+  if (settings_.real_time_factor == 0.0) warn_full_speed();
   if (settings_.load_input != "sde")
     ROS_INFO("gear_simulator: load input '%s' from %s (std_msgs/Float64, m/s^2), applied at the next step",
              settings_.load_input.c_str(), load_sub_.getTopic().c_str());
   sim_->start();
 }
 
+void GearSimulator::warn_full_speed() const {
+  ROS_WARN("gear_simulator: real_time_factor 0: while %s, %s, joint_states or a Float64 topic has a subscriber, "
+           "at most %g messages per wall second go out (rosbag record -a keeps up); a subscriber slower than that "
+           "loses messages (roscpp drops its oldest; gaps in header.seq show it). Every state at full speed: subscribe "
+           "to %s alone (up to %zu states per message), started before the node runs (paused:=true, then "
+           "~unpause); or record:=true, the node's own bag",
+           state_.topic.c_str(), state_batch_.topic.c_str(), kFullSpeedMessageRate, state_batch_.topic.c_str(),
+           kBurst);
+}
+
 GearSimulator::~GearSimulator() {
   if (sim_) sim_->stop();
+  if (sim_ && stop_signal() != 0)
+    log_at_stop(StopLog::Info, std::string("gear_simulator: stopped by ") + stop_signal_name() + " at t = " +
+                                   seconds(sim_->status().time));
   record_close();
 }
 
@@ -199,16 +249,28 @@ void GearSimulator::record(const std::string& topic, const ros::Time& stamp, con
 void GearSimulator::load_command(const std_msgs::Float64ConstPtr& m) {
   const LiveSimulation::Status s = sim_->status();
   const ros::Time now = ros::Time::now();
-  sim_->command_load(m->data, now.toSec());
   record(load_sub_.getTopic(), sim_stamp(s.time), *m);  // received after the state at s.time
+  ++commands_received_;
+  last_command_ = std::chrono::steady_clock::now();
+  silence_warned_ = false;
+  if (!(std::abs(m->data) <= kMaxLoadMean)) {  // NaN and inf too
+    ++commands_refused_;
+    ROS_WARN_THROTTLE(1.0, "load command %g m/s^2 refused: outside [-%g, %g] m/s^2 (the range of load.initial_mean); "
+                      "Phi keeps the command in effect (%llu refused so far)",
+                      m->data, kMaxLoadMean, kMaxLoadMean, static_cast<unsigned long long>(commands_refused_));
+    return;
+  }
+  sim_->command_load(m->data, now.toSec());
 }
 
 // ---- callbacks ----
 
-void GearSimulator::reconfigure(SimulatorConfig& config, uint32_t /*level*/) {
+void GearSimulator::reconfigure(RefusingConfig& config, uint32_t /*level*/) {
   for (const auto& [name, field] : double_parameters()) {
     if (!std::isnan(config.*field)) continue;
-    ROS_WARN("dynamic_reconfigure: %s = nan or out of range: refused, keeping %g", name.c_str(), dynamic_.*field);
+    const auto why = config.refused.find(name);
+    ROS_WARN("dynamic_reconfigure: %s: refused, keeping %g",
+             why != config.refused.end() ? why->second.c_str() : (name + " = nan").c_str(), dynamic_.*field);
     config.*field = dynamic_.*field;
   }
   Request r;
@@ -218,6 +280,7 @@ void GearSimulator::reconfigure(SimulatorConfig& config, uint32_t /*level*/) {
   if (config.real_time_factor != dynamic_.real_time_factor) r.real_time_factor = config.real_time_factor;
   if (config.publish_rate != dynamic_.publish_rate) r.publish_rate = config.publish_rate;
   if (r.mu || r.sigma || r.drift || r.real_time_factor || r.publish_rate) {
+    if (r.real_time_factor && *r.real_time_factor == 0.0) warn_full_speed();
     sim_->request(r);  // returns once applied; a refused value (e.g. sigma without noise) is not
     // The server answers with `config`: it shows what is in effect, as LiveSimulation decided.
     const LiveSimulation::Status in_effect = sim_->status();
@@ -235,6 +298,7 @@ bool GearSimulator::pause(std_srvs::Empty::Request&, std_srvs::Empty::Response&)
 }
 
 bool GearSimulator::unpause(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
+  resend_start_ = true;
   Request r;
   r.paused = false;
   return sim_->request(r).ok;
@@ -247,12 +311,31 @@ bool GearSimulator::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&)
 }
 
 bool GearSimulator::step(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+  resend_start_ = true;
   Request r;
   r.step = true;
   const LiveSimulation::Outcome o = sim_->request(r);
   res.success = o.ok;
   res.message = o.message;
   return true;
+}
+
+void GearSimulator::check_clock_publishers() {
+  XmlRpc::XmlRpcValue request, response, payload;
+  request[0] = ros::this_node::getName();
+  if (!ros::master::execute("getSystemState", request, response, payload, false)) return;
+  // payload: [publishers, subscribers, services], each a list of [topic, [node, ...]]
+  XmlRpc::XmlRpcValue& publishers = payload[0];
+  for (int i = 0; i < publishers.size(); ++i) {
+    if (static_cast<std::string>(publishers[i][0]) != "/clock") continue;
+    for (int k = 0; k < publishers[i][1].size(); ++k) {
+      const std::string node = publishers[i][1][k];
+      if (node == ros::this_node::getName() || !other_clocks_.insert(node).second) continue;
+      ROS_WARN("gear_simulator: %s publishes /clock too: sim-time nodes then see two time lines, and /clock "
+               "goes back and forth. Only one simulator may own the clock: start the others with "
+               "publish_clock:=false", node.c_str());
+    }
+  }
 }
 
 void GearSimulator::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) {
@@ -284,6 +367,21 @@ void GearSimulator::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) 
   stat.add("lambda [m/s^3]", s.drift);
   stat.add("load input", settings_.load_input);
   stat.add("load commands applied", s.load_commands);
+  if (settings_.load_input != "sde") {
+    // Commands faster than the integration steps are merged (the last one wins): received minus
+    // refused minus applied.
+    stat.add("load commands received", commands_received_);
+    stat.add("load commands refused (out of range)", commands_refused_);
+    const double silent = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_command_).count();
+    stat.add("wall s since the last load command", commands_received_ > 0 ? silent : -1.0);
+    if (s.state == "running" && silent > kLoadCommandTimeout) {
+      stat.mergeSummaryf(diagnostic_msgs::DiagnosticStatus::WARN, "no load command for %.1f s: Phi held", silent);
+      if (!silence_warned_)
+        ROS_WARN("gear_simulator: no load command on %s for %.1f wall s while running: Phi stays at the last "
+                 "command (or load.initial_mean before the first)", load_sub_.getTopic().c_str(), silent);
+      silence_warned_ = true;
+    }
+  }
   if (spectrum_) {
     const SpectrumPublisher::Stats st = spectrum_->stats();
     stat.add("spectrum: published", st.published);
@@ -308,44 +406,86 @@ void GearSimulator::diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat) 
 // ---- LiveSink (stepping thread) ----
 
 bool GearSimulator::wants_center_distance() const {
-  return !record_prefix_.empty() || state_.wanted() || (settings_.publish_scalars && center_distance_.wanted());
+  return !record_prefix_.empty() || state_.wanted() || state_batch_.wanted() ||
+         (settings_.publish_scalars && center_distance_.wanted());
 }
 
 void GearSimulator::publish(const LiveSample& s) {
   // One clock read per publish instant, for the /clock throttle and the burst's age.
   const auto now = std::chrono::steady_clock::now();
   publish_clock(now, s.t, false);
-  const bool recording = !record_prefix_.empty();
   if (held_.empty()) held_since_ = now;
-  if (recording || state_.wanted()) {
-    held_.push_back(Held{&state_, make_state(s), {}});
+  if (resend_start_.exchange(false) && unsent_start_ && s.step > 0) hold(*unsent_start_, false);
+  unsent_start_.reset();
+  hold(s, true);
+  if (std::exchange(first_publish_, false) && settings_.paused) unsent_start_ = s;
+  if (held_.size() >= kBurst || now - held_since_ >= kBurstWall) flush();
+}
+
+void GearSimulator::hold(const LiveSample& s, bool record_it) {
+  ++instants_held_;
+  const bool recording = record_it && !record_prefix_.empty();
+  if (recording || state_.wanted() || state_batch_.wanted()) {
+    held_.push_back(Held{&state_, make_state(s), {}, state_.wanted()});
     const GearState& m = held_.back().state;
-    record(state_.topic, m.header.stamp, m);
+    if (recording) record(state_.topic, m.header.stamp, m);
   }
+  if (joint_states_.wanted()) held_joints_.push_back(make_joint_state(s, gear_));
   if (settings_.publish_scalars) {
     const ros::Time stamp = sim_stamp(s.t);
     const auto scalar = [&](const CountedPublisher& p, double value) {
       if (!recording && !p.wanted()) return;
       held_.push_back(Held{&p, {}, {}});
       held_.back().scalar.data = value;
-      record(p.topic, stamp, held_.back().scalar);
+      if (recording) record(p.topic, stamp, held_.back().scalar);
     };
     scalar(delta_, s.delta);
     scalar(delta_dot_, s.delta_dot);
     scalar(phi_, s.phi);
     scalar(center_distance_, s.center_distance);
   }
-  if (held_.size() >= kBurst || now - held_since_ >= kBurstWall) flush();
 }
 
 void GearSimulator::flush() {
+  const bool batch = state_batch_.wanted();
+  std::size_t sent = 0, states = 0, scalars = 0;
   for (const Held& h : held_) {
-    if (h.pub == &state_)
-      h.pub->pub.publish(h.state);
-    else
+    if (h.pub == &state_) {
+      if (h.send) h.pub->pub.publish(h.state);
+      states += h.send;
+      if (batch) batch_.states.push_back(h.state);
+    } else if (h.pub->wanted()) {
       h.pub->pub.publish(h.scalar);
+      ++scalars;
+    }
   }
   held_.clear();  // keeps the capacity
+  for (const sensor_msgs::JointState& j : held_joints_) joint_states_.pub.publish(j);
+  scalars += held_joints_.size();  // one more topic with a message per instant
+  held_joints_.clear();
+  sent = states + scalars;
+  if (!batch_.states.empty()) {
+    batch_.header.stamp = batch_.states.back().header.stamp;
+    state_batch_.pub.publish(batch_);
+    batch_.states.clear();
+    ++sent;
+  }
+  // The busiest topic's count: state's, or a scalar topic's (one per instant held).
+  const std::size_t busiest = std::max<std::size_t>({1, states, scalars > 0 ? instants_held_ : 0});
+  instants_held_ = 0;
+  if (sent > 0 && sim_ && sim_->real_time_factor() == 0.0) pace_messages(sent, busiest);
+}
+
+void GearSimulator::pace_messages(std::size_t sent, std::size_t busiest) {
+  // A budget in wall time: what was sent moves it ahead; the loop sleeps while it is ahead of the
+  // present, and a budget that fell behind (a pause, no subscriber) restarts at now.
+  const auto now = std::chrono::steady_clock::now();
+  if (message_budget_ < now - LiveSimulation::kMaxLag) message_budget_ = now;
+  const double seconds = std::max(static_cast<double>(sent) / kFullSpeedMessageRate,
+                                  static_cast<double>(busiest) / kFullSpeedTopicRate);
+  message_budget_ += std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+      std::chrono::duration<double>(seconds));
+  if (message_budget_ - now >= LiveSimulation::kMinWait) std::this_thread::sleep_until(message_budget_);
 }
 
 void GearSimulator::spectrum(const SpectrumSamples& window) {

@@ -4,6 +4,9 @@
 
 #include <chrono>
 #include <cstdio>
+#include <string>
+
+#include "gear_dynamics/ros/stop_signal.hpp"
 
 namespace gear_dynamics {
 
@@ -80,19 +83,24 @@ void LiveRecorder::close() {
   not_empty_.notify_all();
   not_full_.notify_all();
   if (writer_.joinable()) writer_.join();
+  // At a stop by signal this runs after roscpp's shutdown: log_at_stop still reaches the terminal.
   try {
     bag_.close();
     if (std::rename((path_ + ".active").c_str(), path_.c_str()) != 0)
-      ROS_ERROR("record: could not rename %s.active to %s", path_.c_str(), path_.c_str());
+      log_at_stop(StopLog::Error, "record: could not rename " + path_ + ".active to " + path_);
   } catch (const std::exception& e) {
-    ROS_ERROR("record: closing %s failed: %s", path_.c_str(), e.what());
+    log_at_stop(StopLog::Error, "record: closing " + path_ + " failed: " + e.what());
   }
-  if (lost_ > 0)
-    ROS_ERROR("record: %s holds %llu messages; %llu could not be written (%s)", path_.c_str(),
-              static_cast<unsigned long long>(written_), static_cast<unsigned long long>(lost_), error_.c_str());
-  else
-    ROS_INFO("record: %s holds all %llu messages published (the stepping thread waited %.3f s for the disk)",
-             path_.c_str(), static_cast<unsigned long long>(written_), waited_);
+  char line[256];
+  if (lost_ > 0) {
+    std::snprintf(line, sizeof line, "%llu messages; %llu could not be written (",
+                  static_cast<unsigned long long>(written_), static_cast<unsigned long long>(lost_));
+    log_at_stop(StopLog::Error, "record: " + path_ + " holds " + line + error_ + ")");
+  } else {
+    std::snprintf(line, sizeof line, "all %llu messages published (the stepping thread waited %.3f s for the disk)",
+                  static_cast<unsigned long long>(written_), waited_);
+    log_at_stop(StopLog::Info, "record: " + path_ + " holds " + line);
+  }
 }
 
 std::uint64_t LiveRecorder::written() const {

@@ -22,6 +22,9 @@ extern "C" void remember_and_shut_down(int sig) {
 void install_stop_handlers(OnSigint on_sigint) {
   if (on_sigint == OnSigint::RequestShutdown) {
     std::signal(SIGINT, remember_and_shut_down);
+  } else if (on_sigint == OnSigint::RequestShutdownAlsoSigterm) {
+    std::signal(SIGINT, remember_and_shut_down);
+    std::signal(SIGTERM, remember_and_shut_down);
   } else {
     std::signal(SIGINT, remember);
     std::signal(SIGTERM, remember);
@@ -29,18 +32,24 @@ void install_stop_handlers(OnSigint on_sigint) {
 }
 
 void repeat_early_stop() {
-  if (g_signal == SIGINT) ros::requestShutdown();
+  if (g_signal != 0) ros::requestShutdown();
 }
 
 int stop_signal() { return g_signal; }
 
 const char* stop_signal_name() { return g_signal == SIGTERM ? "SIGTERM" : "SIGINT"; }
 
-void warn_at_stop(const std::string& line) {
-  if (ros::isShuttingDown())
-    std::fprintf(stderr, "[ WARN] %s\n", line.c_str());
-  else
-    ROS_WARN("%s", line.c_str());
+void log_at_stop(StopLog level, const std::string& line) {
+  if (ros::isShuttingDown()) {
+    const char* tag = level == StopLog::Info ? "[ INFO]" : level == StopLog::Warn ? "[ WARN]" : "[ERROR]";
+    std::fprintf(stderr, "%s %s\n", tag, line.c_str());
+    return;
+  }
+  switch (level) {
+    case StopLog::Info: ROS_INFO("%s", line.c_str()); break;
+    case StopLog::Warn: ROS_WARN("%s", line.c_str()); break;
+    case StopLog::Error: ROS_ERROR("%s", line.c_str()); break;
+  }
 }
 
 }  // namespace gear_dynamics

@@ -1,12 +1,15 @@
 #!/usr/bin/python3
 """load_input: external: Phi is the last load_command, held, with no noise; a dynparam request for
-sigma or lambda is refused and the server's answer shows the 0 in effect."""
+sigma or lambda is refused and the server's answer shows the 0 in effect. A command out of range
+is refused (Phi stays, diagnostics count it); a running node without commands for over a wall
+second turns diagnostics WARN, Phi held."""
 import time
 import unittest
 
 import dynamic_reconfigure.client
 import rospy
 import rostest
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from gear_dynamics.msg import GearState
 from std_msgs.msg import Float64
 
@@ -33,6 +36,27 @@ class ExternalLoad(unittest.TestCase):
         msgs = state.wait_for(lambda m: len(m) >= 5, 20.0, 'five stepped states')
         self.assertEqual({m.phi for m in msgs[-3:]}, {COMMAND})
         self.assertEqual({m.sigma for m in msgs}, {0.0})
+
+        diagnostics = Collector('/diagnostics', DiagnosticArray)
+        command.publish(Float64(2.0e4))  # outside [-1e4, 1e4]
+        time.sleep(0.5)
+        state.clear()
+        srv['step']()
+        self.assertEqual(state.wait_for(len, 20.0, 'a stepped state')[-1].phi, COMMAND)
+
+        def ours(arrays):
+            return [s for a in arrays for s in a.status if s.name.endswith('simulation')]
+
+        def value(s, key):
+            return {v.key: v.value for v in s.values}.get(key)
+
+        refused = lambda arrays: [s for s in ours(arrays) if value(s, 'load commands refused (out of range)') == '1']
+        diagnostics.wait_for(refused, 10.0, 'one refused command in diagnostics')
+        srv['unpause']()  # running without commands
+        silent = lambda arrays: [s for s in ours(arrays) if s.level == DiagnosticStatus.WARN and
+                                 'no load command' in s.message]
+        diagnostics.wait_for(silent, 10.0, 'a WARN for the silent command stream')
+        self.assertEqual(state.wait_for(lambda m: len(m) > 10, 20.0, 'states while running')[-1].phi, COMMAND)
 
 
 if __name__ == '__main__':

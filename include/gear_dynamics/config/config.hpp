@@ -37,6 +37,8 @@ struct ModelConfig {
 constexpr double kMaxFrictionCoefficient = 0.2;
 // Largest load noise intensity accepted: 20x the paper's 5 m/s^2/sqrt(s).
 constexpr double kMaxLoadSigma = 100.0;
+// Largest |Phi| accepted as load.initial_mean and as a live load command [m/s^2].
+constexpr double kMaxLoadMean = 1.0e4;
 // Largest |lambda| accepted [m/s^3].
 constexpr double kMaxLoadDrift = 1.0e6;
 // RK4 is stable for an undamped oscillator while omega h < 2 sqrt(2) (doc/model.md §5).

@@ -6,6 +6,7 @@
 
 #include <dynamic_reconfigure/server.h>
 #include <ros/ros.h>
+#include <sensor_msgs/JointState.h>
 #include <std_srvs/Empty.h>
 #include <std_msgs/Float64.h>
 #include <std_srvs/Trigger.h>
@@ -14,13 +15,16 @@
 #include <chrono>
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <atomic>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
 #include "gear_dynamics/GearState.h"
+#include "gear_dynamics/GearStateBatch.h"
 #include "gear_dynamics/SimulatorConfig.h"
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/config/simulator_settings.hpp"
@@ -32,11 +36,13 @@ namespace gear_dynamics {
 
 // The reconfigure server would clamp every request into Simulator.cfg's ranges, silently; with
 // this Config a value out of range (or NaN) is refused with a warning instead, as at start:
-// __clamp__ marks it NaN and GearSimulator::reconfigure keeps the value in effect.
+// __clamp__ marks it NaN and says why in `refused`, and GearSimulator::reconfigure keeps the value
+// in effect and logs one line per refused value.
 struct RefusingConfig : SimulatorConfig {
   RefusingConfig() = default;
   RefusingConfig(const SimulatorConfig& c) : SimulatorConfig(c) {}  // the server converts its defaults
   void __clamp__();
+  std::map<std::string, std::string> refused;  // name -> "mu = 5 is out of range [0, 0.2]"
 };
 
 // A publisher that counts its subscribers through roscpp's connect callbacks: the stepping thread
@@ -81,7 +87,11 @@ class GearSimulator : private LiveSink {
   void idle(const LiveSample& last) override;
   void finished(const LiveSample& last) override;
   bool wants_center_distance() const override;
-  void flush() override;  // publishes the held burst (stepping thread)
+  void flush() override;  // publishes the held burst, and it as one state_batch (stepping thread)
+  // Holds the messages of `s` for the topics that want them; into the bag with `record_it`.
+  void hold(const LiveSample& s, bool record_it);
+  // At real_time_factor 0: sleeps so that the messages sent stay within kFullSpeedMessageRate.
+  void pace_messages(std::size_t sent, std::size_t busiest_topic);
   void spectrum(const SpectrumSamples& window) override;  // hands the window to spectrum_
   // /clock = t + 1 s at wall time `now`, if `always` or kClockInterval after the last one.
   void publish_clock(std::chrono::steady_clock::time_point now, double t, bool always);
@@ -93,18 +103,24 @@ class GearSimulator : private LiveSink {
   template <class M>
   void record(const std::string& topic, const ros::Time& stamp, const M& msg);
 
+  // At real_time_factor 0: which subscribers can lose messages, and how to get every state.
+  void warn_full_speed() const;
+
   // ---- callbacks (spinner thread) ----
   void load_command(const std_msgs::Float64ConstPtr& m);
-  void reconfigure(SimulatorConfig& config, uint32_t level);
+  void reconfigure(RefusingConfig& config, uint32_t level);
   bool pause(std_srvs::Empty::Request&, std_srvs::Empty::Response&);
   bool unpause(std_srvs::Empty::Request&, std_srvs::Empty::Response&);
   bool reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&);
   bool step(std_srvs::Trigger::Request&, std_srvs::Trigger::Response&);
   void diagnose(diagnostic_updater::DiagnosticStatusWrapper& stat);
+  // With publish_clock: warns once per other node that publishes /clock (the master's state).
+  void check_clock_publishers();
 
   // Fixed after construction.
   ros::NodeHandle nh_, private_nh_;
   ModelConfig config_;
+  GearPair gear_;  // derived from config_.gear (joint_states)
   SimulatorSettings settings_;
 
   std::string record_prefix_;  // empty: no recording
@@ -118,9 +134,20 @@ class GearSimulator : private LiveSink {
     const CountedPublisher* pub;
     GearState state;  // pub == &state_
     std_msgs::Float64 scalar;
+    bool send = true;  // false: a state held for state_batch only
   };
   std::vector<Held> held_;
   std::chrono::steady_clock::time_point held_since_;
+  GearStateBatch batch_;  // reused: its vector keeps its capacity
+  std::vector<sensor_msgs::JointState> held_joints_;  // joint_states of the burst
+  std::chrono::steady_clock::time_point message_budget_;  // pace_messages
+  std::size_t instants_held_ = 0;  // publish instants in held_
+  // A run started paused publishes t = 0 before anyone can have subscribed: that sample goes out
+  // again at the first ~unpause or ~step (resend_start_, set by them), so that a recorder started
+  // first gets every state from t = 0.
+  std::optional<LiveSample> unsent_start_;
+  bool first_publish_ = true;
+  std::atomic<bool> resend_start_{false};
 
   // The recording (stepping thread; diagnostics read it).
   std::mutex record_mutex_;
@@ -131,10 +158,13 @@ class GearSimulator : private LiveSink {
 
   // Spinner thread only.
   SimulatorConfig dynamic_;  // the last configuration handed over
+  std::uint64_t commands_received_ = 0, commands_refused_ = 0;  // load_command
+  std::chrono::steady_clock::time_point last_command_ = std::chrono::steady_clock::now();
+  bool silence_warned_ = false;
   Status last_diagnosis_;
 
   // ROS interfaces (the sink runs on the stepping thread; roscpp publishers are thread-safe).
-  CountedPublisher state_, delta_, delta_dot_, phi_, center_distance_;
+  CountedPublisher state_, state_batch_, joint_states_, delta_, delta_dot_, phi_, center_distance_;
   ros::Publisher clock_pub_, run_info_pub_, final_state_pub_;
   ros::Subscriber load_sub_;
   ros::ServiceServer pause_srv_, unpause_srv_, reset_srv_, step_srv_;
@@ -142,6 +172,7 @@ class GearSimulator : private LiveSink {
   dynamic_reconfigure::Server<RefusingConfig> reconfigure_server_;
   diagnostic_updater::Updater updater_;
   ros::WallTimer diagnostics_timer_;
+  std::set<std::string> other_clocks_;  // publishers of /clock already warned about
 
   std::unique_ptr<SpectrumPublisher> spectrum_;  // with simulator.spectrum_rate > 0
   std::optional<LiveSimulation> sim_;  // last: publishes through the members above
