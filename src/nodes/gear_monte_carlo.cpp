@@ -12,6 +12,10 @@ int main(int argc, char** argv) {
   gear_dynamics::install_stop_handlers(gear_dynamics::OnSigint::OnlyRemember);
   ros::NodeHandle pnh("~");
   gear_dynamics::MonteCarloNode node(pnh);
-  if (const int code = node.init()) return code;
-  return node.run();
+  int code = node.init();
+  if (code == 0) code = node.run();
+  // A waiting aggregator that never saw this node alive (it refused its folder at once) learns from
+  // this that it has ended; the launch clears the private namespace, so the value is this run's.
+  pnh.setParam("exit_status", code);
+  return code;
 }

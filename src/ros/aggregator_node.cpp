@@ -100,6 +100,8 @@ bool AggregatorNode::wait() {
   ROS_INFO("gear_aggregator: waiting for the batch in %s", first.c_str());
   const ros::WallTime start = ros::WallTime::now();
   bool seen = false;
+  const std::string status_key = settings_.batch_node + "/exit_status";
+  const bool earlier_status = ros::param::has(status_key);
   // Whether every listed bag is there is asked again when a manifest was rewritten (a writer does
   // that after its last bag) and every 10 s besides: parsing the manifest of a large batch at every
   // poll would take CPU from the batch it waits for.
@@ -118,7 +120,9 @@ bool AggregatorNode::wait() {
       if (complete) return true;
     }
     const bool running = node_alive(settings_.batch_node);
-    if (running) seen = true;
+    // A batch node that ended before the first poll (a folder refused at once) is never seen alive;
+    // it leaves its exit status on the master (one there before this wait is an earlier run's).
+    if (running || (!earlier_status && ros::param::has(status_key))) seen = true;
     if (seen && !running) {
       ROS_WARN("gear_aggregator: %s ended before its batch was complete; aggregating what it left",
                settings_.batch_node.c_str());
