@@ -396,7 +396,7 @@ void OverTimeFiles::md_poincare(std::ostream& r) const {
   r << "\n## Poincaré section of the phase ensemble (doc/nonlinear-dynamics.md §3)\n\n"
        "(δ, δ̇) of every phase run (φ0 = j·φn/64) at mesh phase 0 once per mesh period T_m, as the batch recorded them "
        "(`/gear/poincare`, doc/batch-folder.md §5: grid states where t_k = (φn − φ0)/Ω + k·T_m is on the integration "
-       "grid, otherwise interpolated within the step, cubic Hermite in δ and linear in δ̇), from t = "
+       "grid, otherwise interpolated within the step, cubic Hermite in δ and its slope for δ̇), from t = "
     << general(s.poincare_transient, 6) << " s on (`analysis.poincare_transient`, after the start-up; poincare.csv). "
        "A periodic response would put each run's points on a few fixed points; a cloud is the aperiodic rattle.\n\n"
        "| " << head << " | phase runs | points | δ mean ± sd [mm] | δ min – max [mm] | δ̇ mean ± sd [mm/s] | "
