@@ -140,7 +140,10 @@ def startup_signals(suite, cwd):
         stopped = 0 if node == "gear_simulator" else 1
         for delay in delays:
             with suite.case("node_signal", "%s__sigint_at_%.3fs" % (node, delay)):
-                p = fl.start_node(node, fl.node_name(node), params)
+                # As from a terminal: a test run started in the background (`cmd &` in a script)
+                # inherits SIGINT ignored, and a SIGINT before the node's handler would be lost.
+                p = fl.start_node(node, fl.node_name(node), params,
+                                  preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
                 time.sleep(delay)
                 p.send_signal(signal.SIGINT)
                 try:
