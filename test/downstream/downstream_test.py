@@ -15,8 +15,9 @@ import shutil
 import subprocess
 import sys
 import tempfile
-import time
-import xml.etree.ElementTree as ET
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+from junit_cases import run_cases  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
@@ -150,29 +151,10 @@ def self_check(d):
 
 def main():
     d = Downstream()
-    suite = ET.Element("testsuite", name="downstream")
-    failures = 0
     cases = [("checker_sees_headers_and_libraries", self_check), ("every_library_called", case_every_library_called),
              ("every_library_exported", case_every_library_exported), ("links_and_runs", case_links_and_runs)]
-    for name, check in cases:
-        start = time.time()
-        try:
-            problems = check(d)
-        except (AssertionError, OSError) as e:
-            problems = [str(e)]
-        case = ET.SubElement(suite, "testcase", classname="downstream", name=name, time=f"{time.time() - start:.3f}")
-        print(f"downstream.{name}: {'ok' if not problems else 'FAILED'}")
-        if problems:
-            failures += 1
-            ET.SubElement(case, "failure", message=problems[0][:200]).text = "\n".join(problems)
-            for p in problems:
-                print("  " + p)
-    suite.set("tests", str(len(cases)))
-    suite.set("failures", str(failures))
-    suite.set("errors", "0")
-    if len(sys.argv) > 1:
-        os.makedirs(os.path.dirname(sys.argv[1]), exist_ok=True)
-        ET.ElementTree(suite).write(sys.argv[1], encoding="utf-8", xml_declaration=True)
+    failures = run_cases("downstream", [(name, lambda check=check: check(d)) for name, check in cases],
+                         sys.argv[1] if len(sys.argv) > 1 else None)
     if failures:
         print(f"(workspace kept: {d.ws})")
     else:

@@ -10,8 +10,9 @@ usage: check_layers.py JUNIT_XML"""
 import os
 import re
 import sys
-import time
-import xml.etree.ElementTree as ET
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+from junit_cases import run_cases  # noqa: E402
 
 # The core's layers and what each depends on directly (a DAG). A layer may include its own headers
 # and those of every layer it reaches; siblings (live, montecarlo, analysis on config) may not
@@ -150,8 +151,6 @@ def check_graph():
 
 
 def main():
-    suite = ET.Element("testsuite", name="layers")
-    failures = 0
     cases = [("checker_catches_violations", self_check), ("graph_folders_and_links", check_graph)]
     for layer in LAYERS:
         def check(layer=layer):
@@ -164,27 +163,7 @@ def main():
                 problems.append(f"layer '{layer}' has no files")
             return problems
         cases.append((f"layer_{layer}", check))
-    for name, check in cases:
-        start = time.time()
-        try:
-            problems = check()
-        except AssertionError as e:
-            problems = [str(e)]
-        case = ET.SubElement(suite, "testcase", classname="layers", name=name, time=f"{time.time() - start:.3f}")
-        status = "ok" if not problems else "FAILED"
-        print(f"layers.{name}: {status}")
-        if problems:
-            failures += 1
-            ET.SubElement(case, "failure", message=problems[0]).text = "\n".join(problems)
-            for p in problems:
-                print("  " + p)
-    suite.set("tests", str(len(cases)))
-    suite.set("failures", str(failures))
-    suite.set("errors", "0")
-    if len(sys.argv) > 1:
-        os.makedirs(os.path.dirname(sys.argv[1]), exist_ok=True)
-        ET.ElementTree(suite).write(sys.argv[1], encoding="utf-8", xml_declaration=True)
-    return 1 if failures else 0
+    return 1 if run_cases("layers", cases, sys.argv[1] if len(sys.argv) > 1 else None) else 0
 
 
 if __name__ == "__main__":
