@@ -4,8 +4,42 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace gear_dynamics {
+
+// How the mesh stiffness K(theta1) is obtained (doc/model.md §3): the paper's two ISO 6336 levels,
+// or the tooth geometry by the potential-energy method (model/tooth_stiffness.hpp).
+enum class MeshStiffnessModel { kSquareWave, kPotentialEnergy };
+// The sign of the friction force: the paper's, constant (D5), or reversed at the pitch point, where
+// the sliding velocity changes sign (doc/model.md §2).
+enum class FrictionDirection { kConstant, kReversing };
+enum class FaultyGear { kNone, kPinion, kWheel };
+
+// A root crack in one tooth (Chaari, Fakhfakh & Haddar 2009): a straight crack that starts at the
+// root of the tooth's contact side and runs at `angle` to the tooth's centre line, `depth` long.
+struct RootCrack {
+  FaultyGear gear = FaultyGear::kNone;
+  int tooth = 0;                       // index of the tooth: tooth 0 is in pair 0 (doc/model.md §3)
+  double depth = 0.0;                  // q [m]
+  double angle = 0.7853981633974483;   // upsilon [rad] (45 deg)
+};
+
+// A spall (pit) on one tooth's flank: a rectangle of the face where the teeth do not touch.
+struct Spall {
+  FaultyGear gear = FaultyGear::kNone;
+  int tooth = 0;
+  double length = 0.0;    // extent along the line of action [m]
+  double width = 0.0;     // extent across the face [m], at most the face width
+  double position = 0.0;  // radius of its centre on the faulty tooth [m]
+};
+
+// Static transmission error: the deviation of each tooth's profile from the true involute along
+// the line of action [m] (positive: material added), constant over the tooth. Teeth beyond the
+// lists' ends are true.
+struct ProfileErrors {
+  std::vector<double> pinion, wheel;
+};
 
 // What a user sets (paper Table 1 plus doc/model.md's assumed values).
 struct GearInputs {
@@ -25,6 +59,15 @@ struct GearInputs {
   double damping_ratio = 0.09;         // zeta_ref [-] at the reference load
   double reference_load = 1000.0;      // F_ref [N]
   double mesh_phase = 0.0;             // phi0 [rad], initial mesh phase in [0, phi_n)
+  double profile_shift1 = 0.0;         // x1 [-], pinion profile shift coefficient
+  double profile_shift2 = 0.0;         // x2 [-], wheel profile shift coefficient
+  double bore_radius1 = 0.008;         // pinion bore (shaft) radius [m], for the fillet foundation
+  double bore_radius2 = 0.030;         // wheel bore radius [m]
+  MeshStiffnessModel mesh_stiffness = MeshStiffnessModel::kSquareWave;
+  FrictionDirection friction_direction = FrictionDirection::kConstant;
+  RootCrack crack;
+  Spall spall;
+  ProfileErrors profile_errors;
 };
 
 // Derived quantities, named as in doc/model.md §3.
