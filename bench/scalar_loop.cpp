@@ -48,7 +48,7 @@ void ScalarModel::rk4(double H, double la, double lb, double K, double qa, doubl
   if ((lo <= b_ && hi >= b_) || (lo <= -b_ && hi >= -b_)) {
     d = d0, v = v0;
     gear_dynamics::kernel::NoTangent none;
-    gear_dynamics::kernel::located_segment({H, K, b_, alpha_, qa, qm, qb, la, lb}, d, v, none);
+    gear_dynamics::kernel::located_segment({H, K, K, K, b_, alpha_, qa, qm, qb, la, lb, 0.0, 0.0}, d, v, none);
   }
 }
 

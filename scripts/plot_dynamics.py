@@ -4,7 +4,7 @@
 usage: plot_dynamics.py SUBCOMMAND PREFIX [--lyapunov LYAPUNOV_PREFIX]
 
 SUBCOMMAND is the gear_analyze subcommand that wrote PREFIX_*.csv (spectrum, poincare, bifurcation,
-lyapunov, safety); the figures are written as PREFIX_<name>.png. Units on the axes: mm, mm/s, Hz, N.
+lyapunov, safety, stiffness); the figures are written as PREFIX_<name>.png. Units on the axes: mm, mm/s, Hz, N.
 For a bifurcation diagram, --lyapunov adds the exponent along the same parameter (from
 `gear_analyze lyapunov --parameter ...`) as a second panel.
 """
@@ -60,6 +60,11 @@ def spectrum(prefix, _args):
                             color="C0", alpha=0.5, lw=0, label="95 % interval of the mean (where > 0)")
         for k in range(1, 11):
             ax.axvline(k * fm, color="C3", lw=0.5, ls=":", alpha=0.7)
+        sidebands = prefix + "_sidebands.csv"
+        if var == "force" and os.path.exists(sidebands):
+            for sb in read(sidebands):
+                if sb["line"] == "1":
+                    ax.plot(float(sb["bin_frequency"]), float(sb["density"]), "o", mfc="none", color="C1", ms=6)
         series = f"{var}_mean" if ensemble else f"{var}_S1"
         for p in peaks:
             if p["series"] == series and p["is_harmonic"] == "0":
@@ -67,7 +72,8 @@ def spectrum(prefix, _args):
         what = "$\\delta$" if var == "delta" else "mesh force"
         ax.set_ylabel(f"PSD of {what} [{unit}]")
         ax.legend(fontsize=7, loc="upper right")
-    axes[1].set_xlabel("frequency [Hz]   (dotted: k f$_m$; triangles: largest other peaks)")
+    axes[1].set_xlabel("frequency [Hz]   (dotted: k f$_m$; triangles: largest other peaks; "
+                       "circles: sidebands n f$_m$ + k f$_r$ of the faulty gear's rotation)")
     axes[1].set_xscale("log")
     axes[1].set_xlim(max(f[1], fm / 8), min(f[-1], 30000.0))
     axes[0].set_title(f"Welch PSD: Hann, segment {info['segment']} ({float(info['resolution']):.3g} Hz), "
@@ -211,9 +217,22 @@ def safety(prefix, _args):
     save(fig, prefix, "safety")
 
 
+def stiffness(prefix, _args):
+    rows = read(prefix + "_stiffness.csv")
+    a = col(rows, "angle[rad]")
+    k = col(rows, "stiffness[N/m]")
+    fig, ax = plt.subplots(figsize=(10, 3.8))
+    ax.plot(np.degrees(a), k / 1e8, lw=0.8, color="k")
+    ax.set_xlabel("pinion angle $\\theta_1$ [deg] from the model's $\\theta_1$ = 0")
+    ax.set_ylabel("mesh stiffness K [10$^8$ N/m]")
+    ax.set_xlim(0, np.degrees(a[-1]))
+    ax.grid(alpha=0.3)
+    save(fig, prefix, "stiffness")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("command", choices=["spectrum", "poincare", "bifurcation", "lyapunov", "safety"])
+    ap.add_argument("command", choices=["spectrum", "poincare", "bifurcation", "lyapunov", "safety", "stiffness"])
     ap.add_argument("prefix")
     ap.add_argument("--lyapunov", help="prefix of a lyapunov --parameter run to add to a bifurcation diagram")
     args = ap.parse_args()

@@ -1,9 +1,40 @@
 #include "gear_dynamics/config/config.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <memory>
 #include <sstream>
 
+#include "gear_dynamics/engine/normal_stream.hpp"
+#include "gear_dynamics/model/mesh_table.hpp"
+
 namespace gear_dynamics {
+
+// The mesh options as YAML texts: a text key whose choices are the names, in enum order.
+template <class E>
+struct EnumNames;
+template <>
+struct EnumNames<MeshStiffnessModel> {
+  static std::vector<std::string> names() { return {"square_wave", "potential_energy"}; }
+};
+template <>
+struct EnumNames<FrictionDirection> {
+  static std::vector<std::string> names() { return {"constant", "reversing"}; }
+};
+template <>
+struct EnumNames<FaultyGear> {
+  static std::vector<std::string> names() { return {"none", "pinion", "wheel"}; }
+};
+template <class E>
+struct Codec<E, std::enable_if_t<std::is_enum_v<E>>> {
+  static constexpr KeyKind kind = KeyKind::Text;
+  static constexpr std::size_t size = 0;
+  static void set(E& m, const Value& v) {
+    const std::vector<std::string> n = EnumNames<E>::names();
+    m = static_cast<E>(std::find(n.begin(), n.end(), v.text) - n.begin());
+  }
+  static YAML::Node get(E m) { return YAML::Node(EnumNames<E>::names().at(static_cast<std::size_t>(m))); }
+};
 
 namespace {
 
@@ -37,6 +68,58 @@ const std::vector<Section<ModelConfig>>& model_sections() {
                "phi0, initial mesh phase; below one mesh period 2 pi / pinion_teeth")
           .key("friction_coefficient", GD_MEMBER(friction_coefficient), closed(0, kMaxFrictionCoefficient), "-",
                "mu, tooth friction coefficient")
+          .key("friction_direction", GD_MEMBER(gear.friction_direction),
+               "constant: the paper's sign; reversing: reversed at the pitch point")
+          .one_of(EnumNames<FrictionDirection>::names())
+          .optional()
+          .key("mesh_stiffness", GD_MEMBER(gear.mesh_stiffness),
+               "square_wave: the paper's two ISO 6336 levels; potential_energy: from the tooth geometry")
+          .one_of(EnumNames<MeshStiffnessModel>::names())
+          .optional()
+          .key("profile_shift1", GD_MEMBER(gear.profile_shift1), closed(-1, 1.5), "-", "x1, pinion profile shift")
+          .optional()
+          .key("profile_shift2", GD_MEMBER(gear.profile_shift2), closed(-1, 1.5), "-", "x2, wheel profile shift")
+          .optional()
+          .key("bore_radius1", GD_MEMBER(gear.bore_radius1), open(0, kInf), "m",
+               "pinion bore radius (fillet foundation); below the root radius")
+          .optional()
+          .key("bore_radius2", GD_MEMBER(gear.bore_radius2), open(0, kInf), "m",
+               "wheel bore radius (fillet foundation); below the root radius")
+          .optional()
+          .key("crack_gear", GD_MEMBER(gear.crack.gear), "gear with a root crack: none, pinion or wheel")
+          .one_of(EnumNames<FaultyGear>::names())
+          .optional()
+          .key("crack_tooth", GD_MEMBER(gear.crack.tooth), closed(0, 9999), "-",
+               "cracked tooth; tooth 0 is in contact at theta1 = 0; below that gear's teeth")
+          .optional()
+          .key("crack_depth", GD_MEMBER(gear.crack.depth), closed(0, 0.1), "m", "q, crack depth")
+          .optional()
+          .key("crack_angle", GD_MEMBER(gear.crack.angle), open_closed(0, kPi / 2), "rad",
+               "upsilon, crack angle to the tooth's centre line")
+          .optional()
+          .key("spall_gear", GD_MEMBER(gear.spall.gear), "gear with a spall: none, pinion or wheel")
+          .one_of(EnumNames<FaultyGear>::names())
+          .optional()
+          .key("spall_tooth", GD_MEMBER(gear.spall.tooth), closed(0, 9999), "-", "spalled tooth; below that gear's teeth")
+          .optional()
+          .key("spall_length", GD_MEMBER(gear.spall.length), closed(0, 0.1), "m", "spall extent along the line of action")
+          .optional()
+          .key("spall_width", GD_MEMBER(gear.spall.width), closed(0, 1), "m", "spall extent across the face; at most face_width")
+          .optional()
+          .key("spall_position", GD_MEMBER(gear.spall.position), closed(0, 10), "m",
+               "radius of the spall's centre on its tooth, within the active profile")
+          .optional()
+          .key("pinion_profile_errors", GD_MEMBER(profile_errors.pinion), closed(-1e-3, 1e-3), "m",
+               "profile error of pinion teeth 0, 1, ... (static transmission error); the rest 0")
+          .may_be_empty()
+          .optional()
+          .key("wheel_profile_errors", GD_MEMBER(profile_errors.wheel), closed(-1e-3, 1e-3), "m",
+               "profile error of wheel teeth 0, 1, ...; the rest 0")
+          .may_be_empty()
+          .optional()
+          .key("profile_error_sd", GD_MEMBER(profile_errors.sd), closed(0, 1e-3), "m",
+               "sd of a normal profile error per tooth of both gears, drawn from run.seed, added")
+          .optional()
           .key("initial_deflection", GD_MEMBER(initial.deflection), closed(-1e-2, 1e-2), "m", "delta(0)")
           .key("initial_velocity", GD_MEMBER(initial.velocity), closed(-10, 10), "m/s", "delta_dot(0)"),
       Section<ModelConfig>("load", "load.")
@@ -64,6 +147,104 @@ const std::vector<Section<ModelConfig>>& model_sections() {
   return sections;
 }
 
+namespace {
+
+// The faults, bores and profile errors against the geometry of `g` (doc/model.md §3).
+void validate_mesh(const ModelConfig& c, const GearPair& g, std::vector<std::string>& errors) {
+  const GearInputs& in = c.gear;
+  std::ostringstream e;
+  e.precision(12);
+  const auto flush = [&] { errors.push_back(e.str()), e.str(""); };
+  const auto teeth = [&](FaultyGear f) { return f == FaultyGear::kWheel ? in.gear_teeth : in.pinion_teeth; };
+  const auto gear_name = [](FaultyGear f) { return f == FaultyGear::kWheel ? "wheel" : "pinion"; };
+  const bool cracked = in.crack.gear != FaultyGear::kNone && in.crack.depth > 0.0;
+  const bool spalled = in.spall.gear != FaultyGear::kNone && in.spall.length > 0.0 && in.spall.width > 0.0;
+  if ((cracked || spalled) && in.mesh_stiffness != MeshStiffnessModel::kPotentialEnergy) {
+    e << "gear_pair." << (cracked ? "crack_depth = " : "spall_length = ")
+      << (cracked ? in.crack.depth : in.spall.length)
+      << " m needs gear_pair.mesh_stiffness = potential_energy (the square wave has no tooth geometry)";
+    flush();
+  }
+  if (in.crack.gear != FaultyGear::kNone && in.crack.tooth >= teeth(in.crack.gear)) {
+    e << "gear_pair.crack_tooth = " << in.crack.tooth << " is out of range; allowed [0, "
+      << teeth(in.crack.gear) - 1 << "] (the " << gear_name(in.crack.gear) << "'s teeth)";
+    flush();
+  }
+  if (in.spall.gear != FaultyGear::kNone && in.spall.tooth >= teeth(in.spall.gear)) {
+    e << "gear_pair.spall_tooth = " << in.spall.tooth << " is out of range; allowed [0, "
+      << teeth(in.spall.gear) - 1 << "] (the " << gear_name(in.spall.gear) << "'s teeth)";
+    flush();
+  }
+  if (cracked) {
+    // The crack may not cut the tooth through: its reach across the tooth stays below the tooth's
+    // thickness at the base circle.
+    const bool wheel = in.crack.gear == FaultyGear::kWheel;
+    const double rb = wheel ? g.base_radius2 : g.base_radius1;
+    const double x = wheel ? in.profile_shift2 : in.profile_shift1;
+    const double z = teeth(in.crack.gear);
+    const double thickness = 2.0 * rb * (kPi / (2.0 * z) + 2.0 * x * std::tan(in.pressure_angle) / z +
+                                         std::tan(in.pressure_angle) - in.pressure_angle);
+    if (!(in.crack.depth * std::sin(in.crack.angle) < thickness)) {
+      e << "gear_pair.crack_depth = " << in.crack.depth << " m is out of range at crack_angle = " << in.crack.angle
+        << " rad; allowed depth sin(angle) < " << thickness << " m (the tooth's thickness at its base circle)";
+      flush();
+    }
+  }
+  if (spalled) {
+    const bool wheel = in.spall.gear == FaultyGear::kWheel;
+    const double rb = wheel ? g.base_radius2 : g.base_radius1;
+    // The contact on that tooth runs from the start of its active profile to its tip.
+    const double x_lo = wheel ? g.line_of_centres_length - g.x_e : g.x_a;
+    const double r_lo = std::sqrt(rb * rb + x_lo * x_lo), r_hi = wheel ? g.tip_radius2 : g.tip_radius1;
+    if (!(in.spall.position >= r_lo && in.spall.position <= r_hi)) {
+      e << "gear_pair.spall_position = " << in.spall.position << " m is out of range; allowed [" << r_lo << ", "
+        << r_hi << "] m (the " << gear_name(in.spall.gear) << "'s active profile)";
+      flush();
+    }
+    if (in.spall.width > in.face_width) {
+      e << "gear_pair.spall_width = " << in.spall.width << " m is out of range; allowed [0, face_width = "
+        << in.face_width << "] m";
+      flush();
+    }
+  }
+  for (int k = 0; k < 2; ++k) {
+    const double bore = k ? in.bore_radius2 : in.bore_radius1, root = k ? g.root_radius2 : g.root_radius1;
+    if (!(bore < root)) {
+      e << "gear_pair.bore_radius" << k + 1 << " = " << bore << " m is out of range; allowed (0, " << root
+        << ") m (below the root radius)";
+      flush();
+    }
+  }
+  const std::size_t z1 = static_cast<std::size_t>(in.pinion_teeth), z2 = static_cast<std::size_t>(in.gear_teeth);
+  if (c.profile_errors.pinion.size() > z1) {
+    e << "gear_pair.pinion_profile_errors has " << c.profile_errors.pinion.size() << " values; allowed at most "
+      << z1 << " (pinion_teeth)";
+    flush();
+  }
+  if (c.profile_errors.wheel.size() > z2) {
+    e << "gear_pair.wheel_profile_errors has " << c.profile_errors.wheel.size() << " values; allowed at most "
+      << z2 << " (gear_teeth)";
+    flush();
+  }
+}
+
+// GearInputs::profile_errors: the lists plus the seed's normal error per tooth (pinion teeth are
+// normals 0 ... Z1 - 1 of the profile-error stream, wheel teeth the Z2 after them).
+ProfileErrors resolve_profile_errors(const ModelConfig& c) {
+  ProfileErrors out{c.profile_errors.pinion, c.profile_errors.wheel};
+  if (c.profile_errors.sd == 0.0) return out;
+  const NormalStream stream(c.seed, kProfileErrorStream);
+  const auto add = [&](std::vector<double>& list, int teeth, std::uint64_t first) {
+    list.resize(static_cast<std::size_t>(teeth), 0.0);
+    for (int i = 0; i < teeth; ++i) list[i] += c.profile_errors.sd * stream.at(first + i);
+  };
+  add(out.pinion, c.gear.pinion_teeth, 0);
+  add(out.wheel, c.gear.gear_teeth, static_cast<std::uint64_t>(c.gear.pinion_teeth));
+  return out;
+}
+
+}  // namespace
+
 void validate_consistency(const ModelConfig& c) {
   std::vector<std::string> errors;
   const GearPair g = derive(c.gear);
@@ -83,8 +264,9 @@ void validate_consistency(const ModelConfig& c) {
     errors.push_back(e.str());
     e.str("");
   }
+  validate_mesh(c, g, errors);
   const double h = c.run.time_step;
-  if (errors.empty()) {
+  if (errors.empty() && is_paper_mesh(c.gear)) {
     const double wh = g.max_contact_frequency(kMaxFrictionCoefficient) * h;
     if (!(wh < kMaxOmegaTimesStep)) {
       e << "run.time_step = " << h << " s is too large for the stiffest contact: omega_max h = " << wh
@@ -98,6 +280,25 @@ void validate_consistency(const ModelConfig& c) {
     if (c.gear.pinion_speed * h >= shortest) {
       e << "run.time_step = " << h << " s spans a whole stiffness interval at pinion_speed = "
         << c.gear.pinion_speed << " rad/s; allowed time_step < " << shortest / c.gear.pinion_speed << " s";
+      errors.push_back(e.str());
+      e.str("");
+    }
+  } else if (errors.empty()) {
+    const std::shared_ptr<const MeshTable> table = shared_mesh_table(g);
+    const double q_max = g.q3 + kMaxFrictionCoefficient * std::max(table->max_friction(), 0.0);
+    const double wh = std::sqrt(q_max * table->max_stiffness()) * h;
+    if (!(wh < kMaxOmegaTimesStep)) {
+      e << "run.time_step = " << h << " s is too large for the stiffest contact: omega_max h = " << wh
+        << " with omega_max = " << wh / h << " rad/s (largest mesh stiffness " << table->max_stiffness()
+        << " N/m, mu = " << kMaxFrictionCoefficient << "); RK4 needs omega_max h < " << kMaxOmegaTimesStep
+        << ", i.e. time_step < " << kMaxOmegaTimesStep / (wh / h) << " s";
+      errors.push_back(e.str());
+      e.str("");
+    }
+    if (c.gear.pinion_speed * h >= table->min_piece()) {
+      e << "run.time_step = " << h << " s spans the shortest interval of the mesh (" << table->min_piece()
+        << " rad: a pair entering or leaving, a spall's edge or the pitch point) at pinion_speed = "
+        << c.gear.pinion_speed << " rad/s; allowed time_step < " << table->min_piece() / c.gear.pinion_speed << " s";
       errors.push_back(e.str());
       e.str("");
     }
@@ -155,6 +356,7 @@ ModelConfig parse_config(const YAML::Node& root) {
     }
   }
   throw_if_errors(errors);
+  c.gear.profile_errors = resolve_profile_errors(c);
   validate_consistency(c);  // only meaningful once every value is in range
   return c;
 }

@@ -12,7 +12,7 @@ GearLanes::GearLanes(const std::vector<GearLaneSpec>& lanes, double time_step) :
   if (lanes.empty()) throw std::invalid_argument("GearLanes: needs at least one lane");
   const int n = static_cast<int>(lanes.size());
   const int p = (n + Ensemble::kPacket - 1) / Ensemble::kPacket * Ensemble::kPacket;
-  for (Eigen::ArrayXd* a : {&d_, &v_, &load_, &mu_, &q3_, &b_, &alpha_, &k_, &fa_, &fm_, &fb_}) a->setZero(p);
+  for (Eigen::ArrayXd* a : {&d_, &v_, &load_, &mu_, &q3_, &b_, &alpha_, &ka_, &km_, &kb_, &fa_, &fm_, &fb_, &ea_, &eb_}) a->setZero(p);
   b_.setOnes();  // padding lanes rest at 0, far from their boundaries: never located
   lane_.reserve(lanes.size());
   plan_.resize(lanes.size());
@@ -56,18 +56,23 @@ void GearLanes::step() {
     }
     for (int i = p0; i < p1; ++i) {
       const StepSegment& seg = plan_[i].segment[0];
-      k_[i] = seg.stiffness;
+      ka_[i] = seg.stiffness_start;
+      km_[i] = seg.stiffness_mid;
+      kb_[i] = seg.stiffness_end;
+      ea_[i] = seg.error_start;
+      eb_[i] = seg.error_end;
       fa_[i] = seg.friction_start;
       fm_[i] = seg.friction_mid;
       fb_[i] = seg.friction_end;
     }
     const auto seg = [&](const Eigen::ArrayXd& a) { return Packet(a.segment<Ensemble::kPacket>(p0)); };
-    const Packet b = seg(b_), alpha = seg(alpha_), q3 = seg(q3_), mu = seg(mu_), load = seg(load_), K = seg(k_);
+    const Packet b = seg(b_), alpha = seg(alpha_), q3 = seg(q3_), mu = seg(mu_), load = seg(load_);
     const Packet qa = kernel::fused_mul_add(mu, seg(fa_), q3), qm = kernel::fused_mul_add(mu, seg(fm_), q3),
                  qb = kernel::fused_mul_add(mu, seg(fb_), q3);
     Packet d = seg(d_), v = seg(v_);
     // rk4_step's unsplit segment: H = (1 - 0) h, the load constant.
-    kernel::rk4_segment<Packet, Packet>(h_, K, b, alpha, qa, qm, qb, load, load, d, v);
+    kernel::rk4_segment<Packet, Packet>(h_, seg(ka_), seg(km_), seg(kb_), b, alpha, qa, qm, qb, load, load, seg(ea_),
+                                        seg(eb_), d, v);
     d_.segment<Ensemble::kPacket>(p0) = d;
     v_.segment<Ensemble::kPacket>(p0) = v;
   }

@@ -75,6 +75,13 @@ Options parse(int argc, char** argv) {
   add_valued(*spectrum, o, "segment", "L", "Welch segment in samples (default 30 mesh periods)");
   add_valued(*spectrum, o, "overlap", "F", "segment overlap (default 0.5)");
   add_valued(*spectrum, o, "harmonics", "N", "mesh harmonics marked (default 6)");
+  add_valued(*spectrum, o, "sidebands", "K",
+             "sidebands k = 1..K of the faulty gear's rotation frequency marked around each harmonic (default 3)");
+
+  CLI::App* stiffness = app.add_subcommand(
+      "stiffness", "the mesh stiffness K over one pinion revolution from theta1 = 0 (PREFIX_stiffness.csv: "
+                   "angle[rad],stiffness[N/m]), its levels and jumps");
+  add_valued(*stiffness, o, "points", "N", "points per mesh period (default 512)");
 
   CLI::App* poincare = app.add_subcommand(
       "poincare", "(delta, delta_dot) once per mesh period at mesh phase 0: S1, the phase ensemble phi0 = j phi_n / P, "
@@ -164,6 +171,68 @@ double since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// The lines n f_m + k f_r (f_r the rotation frequency of the gear whose teeth differ, k = -K..K,
+// k != 0) of a spectrum: a line is found where the largest bin within one bin of it is a local
+// maximum. Printed and written as PREFIX_sidebands.csv.
+void write_sidebands(const Options& o, const std::vector<double>& f, const std::vector<double>& d, double fm,
+                     double fr, int harmonics) {
+  const int K = static_cast<int>(o.get("sidebands", 3));
+  const double df = f[1] - f[0];
+  std::ofstream sb = open_csv(o, "sidebands");
+  sb << "harmonic,order,frequency,bin_frequency,density,line\n";
+  int found = 0, total = 0;
+  for (int n = 1; n <= harmonics; ++n) {
+    for (int k = -K; k <= K; ++k) {
+      const double target = n * fm + k * fr;
+      const long j = std::lround(target / df);
+      if (k == 0 || j < 2 || j + 2 >= static_cast<long>(d.size())) continue;
+      long m = j;
+      for (long i = j - 1; i <= j + 1; ++i)
+        if (d[i] > d[m]) m = i;
+      const bool line = d[m] > d[m - 1] && d[m] > d[m + 1];
+      found += line, ++total;
+      sb << n << "," << k << "," << target << "," << f[m] << "," << d[m] << "," << (line ? 1 : 0) << "\n";
+    }
+  }
+  std::printf("sidebands of the mesh force at n f_m + k f_r (f_r = %.6g Hz, |k| <= %d): %d of %d are lines\n", fr, K,
+              found, total);
+}
+
+// ---------------------------------------------------------------------------------------------
+int stiffness(const Options& o) {
+  const gd::ModelConfig c = load_config(o, 0);
+  gd::GearInputs in = c.gear;
+  in.mesh_phase = 0.0;  // angles from the model's theta1 = 0
+  const gd::GearPair g = gd::derive(in);
+  const gd::MeshSchedule mesh(g, c.run.time_step);
+  const int per = static_cast<int>(o.get("points", 512));
+  if (per < 8) throw std::runtime_error("--points = " + std::to_string(per) + " is out of range; allowed >= 8");
+  const long N = static_cast<long>(per) * g.in.pinion_teeth;
+  std::ofstream f = open_csv(o, "stiffness");
+  f << "angle[rad],stiffness[N/m]\n";
+  double lo = INFINITY, hi = 0.0, sum = 0.0;
+  for (long i = 0; i <= N; ++i) {
+    const double a = i * g.mesh_period_angle / per, K = mesh.stiffness_at_angle(a);
+    f << a << "," << K << "\n";
+    lo = std::min(lo, K), hi = std::max(hi, K);
+    if (i < N) sum += K;
+  }
+  std::printf("# stiffness: %s, one pinion revolution (%d mesh periods, %d points each); contact ratio %.6g: "
+              "single contact on [0, %.6g) rad of each mesh period %.6g rad\n",
+              g.in.mesh_stiffness == gd::MeshStiffnessModel::kSquareWave ? "square_wave" : "potential_energy",
+              g.in.pinion_teeth, per, g.contact_ratio, g.single_pair_angle, g.mesh_period_angle);
+  std::printf("K: mean %.6g N/m, min %.6g, max %.6g; ISO 6336 square wave k1 = %.6g, k2 = %.6g, mean %.6g\n", sum / N,
+              lo, hi, g.k1, g.k2, g.k_mean);
+  if (const gd::MeshTable* t = mesh.table()) {
+    std::printf("schedule: %d mesh periods, %d pieces, %d nodes; jumps in the first mesh period at", t->mesh_periods(),
+                t->pieces(), t->nodes());
+    for (double b : t->breaks())
+      if (b > 0.0 && b < g.mesh_period_angle) std::printf(" %.6g", b);
+    std::printf(" rad\n");
+  }
+  return 0;
+}
+
 // ---------------------------------------------------------------------------------------------
 int spectrum(const Options& o) {
   const gd::ModelConfig c = load_config(o, o.get("duration", 0));
@@ -175,8 +244,11 @@ int spectrum(const Options& o) {
   // folds back from above Nyquist, and a coarser grid would fold more.
   const int k = static_cast<int>(o.get("decimate", std::max(1.0, std::round(1e-5 / h))));
   const double fs = 1.0 / (k * h), fm = 1.0 / gd::mesh_period(g);
-  // Default segment: 30 mesh periods, so that every mesh harmonic falls on a bin centre.
-  const double seg_default = std::round(30.0 * gd::mesh_period(g) * fs);
+  // Default segment: 30 mesh periods, so that every mesh harmonic falls on a bin centre; with a
+  // faulty or uneven gear whole revolutions of it, so that its sidebands do too.
+  const gd::MeshSchedule schedule(g, h);
+  const int periods = schedule.table() ? schedule.table()->mesh_periods() : 1;
+  const double seg_default = std::round(std::ceil(30.0 / periods) * periods * gd::mesh_period(g) * fs);
   gd::WelchOptions w{static_cast<std::size_t>(o.get("segment", seg_default)), o.get("overlap", 0.5)};
   std::vector<gd::LaneSpec> lanes{gd::deterministic_lane(c, c.friction_coefficient)};
   for (int r = 0; r < R; ++r) lanes.push_back(gd::stochastic_lane(c, c.friction_coefficient, r));
@@ -191,10 +263,10 @@ int spectrum(const Options& o) {
     const std::int64_t N = c.run.steps(), n0 = std::llround(transient / h);
     for (std::int64_t n = 0; n <= N; ++n) {
       if (n >= n0 && (n - n0) % k == 0) {
-        const double K = e.mesh().stiffness(e.time());
+        const double K = e.mesh().stiffness(e.time()), err = e.mesh().transmission_error(e.time());
         for (int l = 0; l < last - first; ++l) {
           delta[first + l].push_back(e.delta()[l]);
-          force[first + l].push_back(gd::mesh_force(g, K, e.delta()[l], e.velocity()[l]));
+          force[first + l].push_back(gd::mesh_force(g, K, e.delta()[l] - err, e.velocity()[l]));
         }
       }
       if (n < N) e.step();
@@ -250,6 +322,7 @@ int spectrum(const Options& o) {
       emit("delta_mean", s1.frequency, bd.mean);
       emit("force_mean", s1.frequency, bf.mean);
     }
+    if (periods > 1) write_sidebands(o, s1.frequency, pf[0].density, fm, fm / periods, H);
     std::ofstream meta = open_csv(o, "spectrum_info");
     meta << "mesh_frequency,sample_rate,resolution,enbw,segment,overlap,segments,realizations,transient,duration\n"
          << fm << "," << fs << "," << s1.resolution << "," << s1.enbw << "," << s1.segment << "," << w.overlap << ","
@@ -625,6 +698,7 @@ int main(int argc, char** argv) try {
   else if (o.command == "bifurcation") rc = bifurcation(o);
   else if (o.command == "lyapunov") rc = lyapunov(o);
   else if (o.command == "safety") rc = safety(o);
+  else if (o.command == "stiffness") rc = stiffness(o);
   else throw std::runtime_error("unknown subcommand '" + o.command + "' (gear_analyze --help)");
   if (rc == 0 && o.png) draw(o);
   return rc;

@@ -96,14 +96,14 @@ TEST(MeshSchedule, SquareWaveTimingAndSplits) {
       const double ph = g.in.pinion_speed * ts_exact;
       const double r = std::fmod(ph, g.mesh_period_angle);
       EXPECT_TRUE(std::abs(r - g.single_pair_angle) < 1e-9 || r < 1e-9 || g.mesh_period_angle - r < 1e-9);
-      EXPECT_NE(a.stiffness, b.stiffness);
+      EXPECT_NE(a.stiffness_mid, b.stiffness_mid);
       EXPECT_EQ(a.friction_start, a.friction_end);  // frozen at the sub-step midpoint
     }
     if (n > 0 && n % 3000 == 0) {  // k2 -> k1 exactly on the grid point n h = j * 3 ms
       EXPECT_EQ(p.segments, 1);
       EXPECT_EQ(mesh.plan(n - 1).segments, 1);
-      EXPECT_EQ(p.segment[0].stiffness, g.k1);
-      EXPECT_EQ(mesh.plan(n - 1).segment[0].stiffness, g.k2);
+      EXPECT_EQ(p.segment[0].stiffness_mid, g.k1);
+      EXPECT_EQ(mesh.plan(n - 1).segment[0].stiffness_mid, g.k2);
       ++on_grid_k1;
     }
   }

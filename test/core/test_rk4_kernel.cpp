@@ -51,34 +51,37 @@ Plain plain_step(const gd::StepPlan& plan, double h, const gd::GearPair& g, cons
   double term_max = 0.0, v_max = std::fabs(s.v);
   for (int k = 0; k < plan.segments; ++k) {
     const gd::StepSegment& seg = plan.segment[k];
-    const double H = (seg.end - seg.begin) * h, half = 0.5 * H, K = seg.stiffness;
+    const double H = (seg.end - seg.begin) * h, half = 0.5 * H;
+    const double e_dot = (seg.error_end - seg.error_start) / H, em = 0.5 * (seg.error_start + seg.error_end);
     const double la = s.load0 + seg.begin * (s.load1 - s.load0), lb = s.load0 + seg.end * (s.load1 - s.load0);
     const double lm = 0.5 * (la + lb);
     const double qa = q3 + s.mu * seg.friction_start, qm = q3 + s.mu * seg.friction_mid,
                  qb = q3 + s.mu * seg.friction_end;
-    const auto acc = [&](double d, double v, double load, double q) {
-      const double gap = d - std::min(std::max(d, -b), b);
+    const auto acc = [&](double d, double v, double load, double q, double K, double e) {
+      const double gap = (d - e) - std::min(std::max(d - e, -b), b);
       const double contact = gap != 0.0 ? std::fabs(d) : 0.0;
       term_max = std::max(term_max, std::fabs(load) + q * (K * contact + alpha * contact * std::fabs(v)));
       v_max = std::max(v_max, std::fabs(v));
-      return load - q * (K * gap + (alpha * std::fabs(gap)) * v);
+      return load - q * (K * gap + (alpha * std::fabs(gap)) * (v - e_dot));
     };
     double& d = r.d;
     double& v = r.v;
     const double d0 = d, v0 = v;
-    const double a1 = acc(d, v, la, qa);
+    const double a1 = acc(d, v, la, qa, seg.stiffness_start, seg.error_start);
     const double v2 = v + half * a1;
-    const double a2 = acc(d + half * v, v2, lm, qm);
+    const double a2 = acc(d + half * v, v2, lm, qm, seg.stiffness_mid, em);
     const double v3 = v + half * a2;
-    const double a3 = acc(d + half * v2, v3, lm, qm);
+    const double a3 = acc(d + half * v2, v3, lm, qm, seg.stiffness_mid, em);
     const double v4 = v + H * a3;
-    const double a4 = acc(d + H * v3, v4, lb, qb);
+    const double a4 = acc(d + H * v3, v4, lb, qb, seg.stiffness_end, seg.error_end);
     const double x[3] = {d0 + half * v0, d0 + half * v2, d0 + H * v3};
     d += (H / 6.0) * (v + 2.0 * v2 + 2.0 * v3 + v4);
     v += (H / 6.0) * (a1 + 2.0 * a2 + 2.0 * a3 + a4);
     // The band of doc/model.md §5 (with a little slack for the plain roundings).
     const double reach = 0.26 * H * (std::fabs(v0) + std::fabs(v));
-    const double lo = std::min({d0, x[0], x[1], x[2], d}) - reach, hi = std::max({d0, x[0], x[1], x[2], d}) + reach;
+    const double spread = std::fabs(seg.error_end - seg.error_start);
+    const double lo = std::min({d0, x[0], x[1], x[2], d}) - reach - seg.error_start - spread,
+                 hi = std::max({d0, x[0], x[1], x[2], d}) + reach - seg.error_start + spread;
     r.near_boundary = r.near_boundary || (lo <= b && hi >= b) || (lo <= -b && hi >= -b);
   }
   r.d_scale = std::max(std::fabs(s.d), std::fabs(r.d)) + h * v_max;

@@ -24,14 +24,26 @@ struct LoadSettings {
   double sigma = 5.0;          // [m/s^2/sqrt(s)]
 };
 
+// Profile errors as set (doc/model.md §3): per-tooth lists plus, if sd > 0, a normal error per
+// tooth drawn from the seed; parse_config puts their sum into GearInputs::profile_errors.
+struct ProfileErrorSettings {
+  std::vector<double> pinion, wheel;  // [m]
+  double sd = 0.0;                    // [m]
+};
+
 struct ModelConfig {
   GearInputs gear;
+  ProfileErrorSettings profile_errors;
   double friction_coefficient = 0.04;  // mu [-]
   InitialState initial;
   LoadSettings load;
   RunSettings run;
   std::uint64_t seed = 20180529;
 };
+
+// The random stream of the per-tooth profile errors: the last realization index a stream key holds,
+// one no run uses (realizations stay below 1e6).
+constexpr std::uint64_t kProfileErrorStream = 4294967295ULL;
 
 // Largest friction coefficient accepted anywhere (config and dynamic_reconfigure).
 constexpr double kMaxFrictionCoefficient = 0.2;

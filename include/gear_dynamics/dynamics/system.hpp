@@ -90,7 +90,7 @@ class GearLanes : public LaneSystem {
   void step_lane(int i, const StepPlan& plan);
   std::vector<Lane> lane_;
   // Structure of arrays, padded to a multiple of Ensemble::kPacket lanes (padding lanes stay 0).
-  Eigen::ArrayXd d_, v_, load_, mu_, q3_, b_, alpha_, k_, fa_, fm_, fb_;
+  Eigen::ArrayXd d_, v_, load_, mu_, q3_, b_, alpha_, ka_, km_, kb_, fa_, fm_, fb_, ea_, eb_;
   std::vector<StepPlan> plan_;
   double h_;
   std::int64_t n_ = 0;

@@ -20,10 +20,11 @@ GD_LOCATED_INLINE int branch_of(double d, double b) { return (d > b) - (d < -b);
 // Most crossings a segment locates; past it the rest of the segment stays on the branch it is on.
 constexpr int kMaxCrossingsPerSegment = 16;
 
-// What a segment is integrated with: stiffness, backlash, Hunt-Crossley coefficient, Q = q3 + mu f
-// at the segment's start, midpoint and end, and the load at its start and end (a straight line).
+// What a segment is integrated with: the stiffness K and Q = q3 + mu f at the segment's start,
+// midpoint and end, backlash, Hunt-Crossley coefficient, and the load and the static transmission
+// error e at its start and end (straight lines). The boundaries are |delta - e| = b.
 struct SegmentInputs {
-  double H, K, b, alpha, qa, qm, qb, la, lb;
+  double H, Ka, Km, Kb, b, alpha, qa, qm, qb, la, lb, ea, eb;
 };
 
 // Variational state carried beside (delta, delta_dot): two tangent vectors (columns of the
@@ -40,16 +41,17 @@ namespace located {
 
 // The acceleration on branch s, smoothly continued past its boundary, with the Jacobian entries
 // jd = da/d(delta), jv = da/d(delta_dot). The same roundings as kernel::acceleration on the branch.
+// e and e_dot: the static transmission error and its rate.
 GD_LOCATED_INLINE double acceleration(int s, double d, double v, double load, double K, double q, double b,
-                                      double alpha, double& jd, double& jv) {
+                                      double alpha, double e, double e_dot, double& jd, double& jv) {
   if (s == 0) {
     jd = jv = 0.0;
     return load;  // what acceleration() gives for g = 0 as well: load - q (+0)
   }
-  const double g = d - (s > 0 ? b : -b);
+  const double g = (d - e) - (s > 0 ? b : -b);
   const double ag = alpha * (s > 0 ? g : -g);  // alpha |g| on this branch
-  const double force = std::fma(ag, v, K * g);
-  jd = -q * (K + (s > 0 ? alpha : -alpha) * v);
+  const double force = std::fma(ag, v - e_dot, K * g);
+  jd = -q * (K + (s > 0 ? alpha : -alpha) * (v - e_dot));
   jv = -q * ag;
   return std::fma(-q, force, load);
 }
@@ -57,20 +59,24 @@ GD_LOCATED_INLINE double acceleration(int s, double d, double v, double load, do
 // One classical RK4 step of length H on branch s: rk4_segment's operations in its order, so that on
 // a step that stays on its branch the result is rk4_segment's, bit for bit. The tangent follows
 // the same stages (the variational equation of the same branch).
+// K, q, the load and e at the step's start (0), midpoint (m) and end (1); e_dot is constant.
+struct BranchInputs {
+  double K0, Km, K1, q0, qm, q1, l0, l1, e0, e1, e_dot;
+};
+
 template <class T>
-GD_LOCATED_INLINE void branch_rk4(int s, double H, double K, double b, double alpha, double q0, double qm, double q1,
-                                  double l0, double l1, double& d, double& v, T& tangent,
-                                  double* stages = nullptr) {
+GD_LOCATED_INLINE void branch_rk4(int s, double H, const BranchInputs& in, double b, double alpha, double& d,
+                                  double& v, T& tangent, double* stages = nullptr) {
   const double half = 0.5 * H;
-  const double lm = 0.5 * (l0 + l1);
+  const double lm = 0.5 * (in.l0 + in.l1), em = 0.5 * (in.e0 + in.e1), ed = in.e_dot;
   double jd[4], jv[4];
-  const double a1 = acceleration(s, d, v, l0, K, q0, b, alpha, jd[0], jv[0]);
+  const double a1 = acceleration(s, d, v, in.l0, in.K0, in.q0, b, alpha, in.e0, ed, jd[0], jv[0]);
   const double v2 = std::fma(half, a1, v);
-  const double a2 = acceleration(s, std::fma(half, v, d), v2, lm, K, qm, b, alpha, jd[1], jv[1]);
+  const double a2 = acceleration(s, std::fma(half, v, d), v2, lm, in.Km, in.qm, b, alpha, em, ed, jd[1], jv[1]);
   const double v3 = std::fma(half, a2, v);
-  const double a3 = acceleration(s, std::fma(half, v2, d), v3, lm, K, qm, b, alpha, jd[2], jv[2]);
+  const double a3 = acceleration(s, std::fma(half, v2, d), v3, lm, in.Km, in.qm, b, alpha, em, ed, jd[2], jv[2]);
   const double v4 = std::fma(H, a3, v);
-  const double a4 = acceleration(s, std::fma(H, v3, d), v4, l1, K, q1, b, alpha, jd[3], jv[3]);
+  const double a4 = acceleration(s, std::fma(H, v3, d), v4, in.l1, in.K1, in.q1, b, alpha, in.e1, ed, jd[3], jv[3]);
   if (stages) {  // the stage deflections, for the packet kernel's proximity test
     stages[0] = std::fma(half, v, d);
     stages[1] = std::fma(half, v2, d);
@@ -164,18 +170,23 @@ inline double first_negative_root(double e0, double e1, double e2, double e3) {
 template <class T = NoTangent>
 inline void located_segment(const SegmentInputs& in, double& d, double& v, T& tangent) {
   using namespace located;
-  const auto load_at = [&](double u) { return u == 0.0 ? in.la : u == 1.0 ? in.lb : std::fma(u, in.lb - in.la, in.la); };
-  const auto q_at = [&](double u) { return u == 0.0 ? in.qa : u == 1.0 ? in.qb : std::fma(u, in.qb - in.qa, in.qa); };
-  int s = branch_of(d, in.b);
+  // K, Q, the load and e at the fraction u of the segment: straight lines between its end values.
+  const auto line = [](double u, double a, double b) { return u == 0.0 ? a : u == 1.0 ? b : std::fma(u, b - a, a); };
+  const double e_dot = (in.eb - in.ea) / in.H;
+  int s = branch_of(d - in.ea, in.b);
   double u0 = 0.0;  // fraction of the segment done
   for (int crossings = 0;; ++crossings) {
     const double rest = 1.0 - u0, Hr = rest * in.H;
-    // The branch step over [u0, u0 + w rest]; the whole segment uses its own midpoint Q.
+    // The branch step over [u0, u0 + w rest]; the whole segment uses its own midpoint K and Q.
     const auto step = [&](double w, double& dd, double& vv, T& tt) {
       const double u1 = w == 1.0 ? 1.0 : u0 + w * rest;
-      const double qm = (u0 == 0.0 && u1 == 1.0) ? in.qm : q_at(0.5 * (u0 + u1));
-      branch_rk4(s, w == 1.0 ? Hr : w * Hr, in.K, in.b, in.alpha, q_at(u0), qm, q_at(u1), load_at(u0), load_at(u1),
-                 dd, vv, tt);
+      const bool whole = u0 == 0.0 && u1 == 1.0;
+      const double um = 0.5 * (u0 + u1);
+      const BranchInputs bi{line(u0, in.Ka, in.Kb), whole ? in.Km : line(um, in.Ka, in.Kb), line(u1, in.Ka, in.Kb),
+                            line(u0, in.qa, in.qb), whole ? in.qm : line(um, in.qa, in.qb), line(u1, in.qa, in.qb),
+                            line(u0, in.la, in.lb), line(u1, in.la, in.lb),
+                            line(u0, in.ea, in.eb), line(u1, in.ea, in.eb), e_dot};
+      branch_rk4(s, w == 1.0 ? Hr : w * Hr, bi, in.b, in.alpha, dd, vv, tt);
     };
     double d1 = d, v1 = v;
     T t1 = tangent;
@@ -184,40 +195,44 @@ inline void located_segment(const SegmentInputs& in, double& d, double& v, T& ta
       d = d1, v = v1, tangent = t1;
       return;
     }
-    // The first boundary the dense output reaches: p(w) = d + m0 w + c2 w^2 + c3 w^3.
+    // The first boundary the dense output reaches: p(w) = d + m0 w + c2 w^2 + c3 w^3 against the
+    // boundary level + e(w), e a straight line (slope de over the rest of the segment).
     const double m0 = Hr * v, m1 = Hr * v1;
     const double c2 = 3.0 * (d1 - d) - 2.0 * m0 - m1, c3 = 2.0 * (d - d1) + m0 + m1;
+    const double e0 = line(u0, in.ea, in.eb), de = rest * (in.eb - in.ea);
     Boundary bnd[2];
     const int nb = boundaries(s, in.b, bnd);
     double w = -1.0;
     int hit = -1;
     for (int k = 0; k < nb; ++k) {
       const double sd = bnd[k].side;
-      const double wk = first_negative_root(sd * (d - bnd[k].level), sd * m0, sd * c2, sd * c3);
+      const double wk = first_negative_root(sd * (d - (bnd[k].level + e0)), sd * (m0 - de), sd * c2, sd * c3);
       if (wk > 0.0 && (w < 0.0 || wk < w)) w = wk, hit = k;
     }
     if (hit < 0) {
       d = d1, v = v1, tangent = t1;
       return;
     }
-    // Newton on the step length: side * (delta(w) - L) = 0, d delta / dw = Hr delta_dot(w).
+    // Newton on the step length: side * (delta(w) - L - e(w)) = 0, whose slope in w is
+    // Hr delta_dot(w) - de.
     const Boundary& B = bnd[hit];
-    double dw = d, vw = v;
+    double dw = d, vw = v, level = B.level + e0;
     T tw = tangent;
     for (int it = 0; it < 8; ++it) {
       dw = d, vw = v, tw = tangent;
       step(w, dw, vw, tw);
-      const double f = dw - B.level, slope = Hr * vw;
+      level = B.level + std::fma(w, de, e0);
+      const double f = dw - level, slope = Hr * vw - de;
       if (std::fabs(f) <= 1e-15 * in.b || slope == 0.0) break;
       const double next = std::fmin(1.0, std::fmax(0.0, w - f / slope));
       if (next == w) break;
       w = next;
     }
-    if (w >= 1.0 && B.side * (dw - B.level) >= 0.0) {  // the step itself stays on the branch
+    if (w >= 1.0 && B.side * (dw - level) >= 0.0) {  // the step itself stays on the branch
       d = dw, v = vw, tangent = tw;
       return;
     }
-    d = B.level;  // on the boundary (within the Newton tolerance): the new branch starts with g = 0
+    d = level;  // on the boundary (within the Newton tolerance): the new branch starts with g = 0
     v = vw;
     tangent = tw;
     s = B.beyond;

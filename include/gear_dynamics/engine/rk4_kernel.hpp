@@ -109,14 +109,16 @@ inline Lanes<N> magnitude(const Lanes<N>& x) {
   return x.abs();
 }
 
-// Eq. 15 with doc/model.md D1/D2: backlash in stiffness and damping, Hunt-Crossley |g|:
-// load - q (K g + alpha |g| v), v entering by the last two roundings (it is the stages' chain).
-// S is double or, for lanes of different gear pairs (GearLanes), P.
+// Eq. 15 with doc/model.md D1/D2: backlash in stiffness and damping, Hunt-Crossley |g|, the static
+// transmission error e (rate e_dot) as a displacement excitation:
+// load - q (K g(delta - e) + alpha |g| (v - e_dot)), v entering by the last two roundings (it is
+// the stages' chain). S is double or, for lanes of different gear pairs (GearLanes), P.
 template <class P, class S>
 GD_KERNEL_INLINE P acceleration(const P& d, const P& v, const P& load, const S& stiffness, const P& q, const S& b,
-                                const S& alpha) {
-  const P g = d - clamp(d, b);
-  const P force = fused_mul_add(P(alpha * magnitude(g)), v, P(stiffness * g));
+                                const S& alpha, const S& e, const S& e_dot) {
+  const P x = d - e;
+  const P g = x - clamp(x, b);
+  const P force = fused_mul_add(P(alpha * magnitude(g)), P(v - e_dot), P(stiffness * g));
   return fused_neg_mul_add(q, force, load);
 }
 
@@ -137,39 +139,44 @@ inline Lanes<N> maximum(const Lanes<N>& a, const Lanes<N>& b) {
   return a.max(b);
 }
 
-// <= 0 where a lane's step may have met |delta| = b: the band from the lowest to the highest of its
-// stage deflections and end, widened by the most a cubic Hermite with the end slopes can overshoot
-// its end values (4/27 (|m0| + |m1|), taken as 1/4), contains b or -b. Elsewhere every stage saw one
-// smooth branch and the dense output stays on it, so the step is the located step, bit for bit.
+// <= 0 where a lane's step may have met |delta - e| = b: the band from the lowest to the highest of
+// its stage deflections and end, widened by the most a cubic Hermite with the end slopes can
+// overshoot its end values (4/27 (|m0| + |m1|), taken as 1/4), and shifted by e (widened by its
+// change over the step), contains b or -b. Elsewhere every stage saw one smooth branch and the dense
+// output stays on it, so the step is the located step, bit for bit.
 template <class P, class S>
-GD_KERNEL_INLINE P boundary_proximity(double H, const S& b, const P& d0, const P& x2, const P& x3, const P& x4,
-                                      const P& d1, const P& v0, const P& v1) {
+GD_KERNEL_INLINE P boundary_proximity(double H, const S& b, const S& ea, const S& eb, const P& d0, const P& x2,
+                                      const P& x3, const P& x4, const P& d1, const P& v0, const P& v1) {
   const P reach = (0.25 * H) * P(magnitude(v0) + magnitude(v1));
-  const P lo = P(minimum(minimum(minimum(d0, x2), minimum(x3, x4)), d1) - reach);
-  const P hi = P(maximum(maximum(maximum(d0, x2), maximum(x3, x4)), d1) + reach);
+  const S spread = magnitude(S(eb - ea));
+  const P lo = P(P(minimum(minimum(minimum(d0, x2), minimum(x3, x4)), d1) - reach) - S(ea + spread));
+  const P hi = P(P(maximum(maximum(maximum(d0, x2), maximum(x3, x4)), d1) + reach) - S(ea - spread));
   return minimum(P((lo - b) * (hi - b)), P((lo + b) * (hi + b)));
 }
 
-// One RK4 step of length H with K and b constant, Q at the three stage times (qa, qm, qb) and the
-// load linear from la to lb, with the backlash crossings located (located_segment.hpp). Every lane
-// first takes the plain step; lanes that may have met a boundary are redone by the located
-// segment, one by one (a few in a thousand lane-steps).
+// One RK4 step of length H with b constant; K, Q at the three stage times (start, midpoint, end);
+// the load and the transmission error straight lines from la to lb and ea to eb; the backlash
+// crossings located (located_segment.hpp). Every lane first takes the plain step; lanes that may
+// have met a boundary are redone by the located segment, one by one (a few in a thousand
+// lane-steps).
 template <class P, class S>
-GD_KERNEL_INLINE void rk4_segment(double H, const S& K, const S& b, const S& alpha, const P& qa, const P& qm,
-                                  const P& qb, const P& la, const P& lb, P& d, P& v) {
+GD_KERNEL_INLINE void rk4_segment(double H, const S& Ka, const S& Km, const S& Kb, const S& b, const S& alpha,
+                                  const P& qa, const P& qm, const P& qb, const P& la, const P& lb, const S& ea,
+                                  const S& eb, P& d, P& v) {
   const P d0 = d, v0 = v;
   const double half = 0.5 * H;
   const P lm = 0.5 * (la + lb);
-  const P a1 = acceleration<P, S>(d, v, la, K, qa, b, alpha);
+  const S em = S(0.5 * S(ea + eb)), e_dot = S(S(eb - ea) / H);
+  const P a1 = acceleration<P, S>(d, v, la, Ka, qa, b, alpha, ea, e_dot);
   const P v2 = fused_mul_add(half, a1, v);
   const P x2 = fused_mul_add(half, v, d);
-  const P a2 = acceleration<P, S>(x2, v2, lm, K, qm, b, alpha);
+  const P a2 = acceleration<P, S>(x2, v2, lm, Km, qm, b, alpha, em, e_dot);
   const P v3 = fused_mul_add(half, a2, v);
   const P x3 = fused_mul_add(half, v2, d);
-  const P a3 = acceleration<P, S>(x3, v3, lm, K, qm, b, alpha);
+  const P a3 = acceleration<P, S>(x3, v3, lm, Km, qm, b, alpha, em, e_dot);
   const P v4 = fused_mul_add(H, a3, v);
   const P x4 = fused_mul_add(H, v3, d);
-  const P a4 = acceleration<P, S>(x4, v4, lb, K, qb, b, alpha);
+  const P a4 = acceleration<P, S>(x4, v4, lb, Kb, qb, b, alpha, eb, e_dot);
   // x + (H/6)(y1 + 2 y2 + 2 y3 + y4), summed left to right; 2 y is exact, so only the last
   // product's fusion changes a rounding.
   const P dv = fused_mul_add(2.0, v3, P(fused_mul_add(2.0, v2, v))) + v4;
@@ -177,18 +184,12 @@ GD_KERNEL_INLINE void rk4_segment(double H, const S& K, const S& b, const S& alp
   d = fused_mul_add(H / 6.0, dv, d);
   v = fused_mul_add(H / 6.0, da, v);
 
-  const P near = boundary_proximity<P, S>(H, b, d0, x2, x3, x4, d, v0, v);
+  const P near = boundary_proximity<P, S>(H, b, ea, eb, d0, x2, x3, x4, d, v0, v);
   const auto locate = [&](int i) {
-    const SegmentInputs in{H,
-                           detail::lane(K, i),
-                           detail::lane(b, i),
-                           detail::lane(alpha, i),
-                           detail::lane(qa, i),
-                           detail::lane(qm, i),
-                           detail::lane(qb, i),
-                           detail::lane(la, i),
-                           detail::lane(lb, i)};
-    double di = detail::lane(d0, i), vi = detail::lane(v0, i);
+    using detail::lane;
+    const SegmentInputs in{H,         lane(Ka, i), lane(Km, i), lane(Kb, i), lane(b, i),  lane(alpha, i), lane(qa, i),
+                           lane(qm, i), lane(qb, i), lane(la, i), lane(lb, i), lane(ea, i), lane(eb, i)};
+    double di = lane(d0, i), vi = lane(v0, i);
     NoTangent none;
     located_segment(in, di, vi, none);
     return std::pair<double, double>(di, vi);
@@ -203,6 +204,21 @@ GD_KERNEL_INLINE void rk4_segment(double H, const S& K, const S& b, const S& alp
   }
 }
 
+// The segment's inputs as the kernel takes them: the loads at its ends (straight line from load0
+// to load1 over the step) and Q = q3 + mu f at its stage times.
+template <class P>
+struct SegmentLoads {
+  P la, lb, qa, qm, qb;
+};
+template <class P>
+GD_KERNEL_INLINE SegmentLoads<P> segment_loads(const StepSegment& seg, double q3, const P& mu, const P& load0,
+                                               const P& load1) {
+  return {seg.begin == 0.0 ? load0 : P(fused_mul_add(seg.begin, P(load1 - load0), load0)),
+          seg.end == 1.0 ? load1 : P(fused_mul_add(seg.end, P(load1 - load0), load0)),
+          P(fused_mul_add(mu, seg.friction_start, q3)), P(fused_mul_add(mu, seg.friction_mid, q3)),
+          P(fused_mul_add(mu, seg.friction_end, q3))};
+}
+
 // One grid step of (d, v) by RK4 over the plan's segments (split at the stiffness switches), the
 // load a straight line from load0 to load1 within the step.
 template <class P>
@@ -210,11 +226,9 @@ GD_KERNEL_INLINE void rk4_step(const StepPlan& plan, double h, double b, double 
                                const P& load0, const P& load1, P& d, P& v) {
   for (int s = 0; s < plan.segments; ++s) {
     const StepSegment& seg = plan.segment[s];
-    const P la = seg.begin == 0.0 ? load0 : fused_mul_add(seg.begin, P(load1 - load0), load0);
-    const P lb = seg.end == 1.0 ? load1 : fused_mul_add(seg.end, P(load1 - load0), load0);
-    rk4_segment<P, double>((seg.end - seg.begin) * h, seg.stiffness, b, alpha, fused_mul_add(mu, seg.friction_start, q3),
-                           fused_mul_add(mu, seg.friction_mid, q3), fused_mul_add(mu, seg.friction_end, q3), la, lb,
-                           d, v);
+    const SegmentLoads<P> l = segment_loads<P>(seg, q3, mu, load0, load1);
+    rk4_segment<P, double>((seg.end - seg.begin) * h, seg.stiffness_start, seg.stiffness_mid, seg.stiffness_end, b,
+                           alpha, l.qa, l.qm, l.qb, l.la, l.lb, seg.error_start, seg.error_end, d, v);
   }
 }
 
@@ -228,19 +242,15 @@ inline void rk4_step_tangent(const StepPlan& plan, double h, double b, double al
   for (int s = 0; s < plan.segments; ++s) {
     const StepSegment& seg = plan.segment[s];
     const double H = (seg.end - seg.begin) * h;
-    const SegmentInputs in{H,
-                           seg.stiffness,
-                           b,
-                           alpha,
-                           fused_mul_add(mu, seg.friction_start, q3),
-                           fused_mul_add(mu, seg.friction_mid, q3),
-                           fused_mul_add(mu, seg.friction_end, q3),
-                           seg.begin == 0.0 ? load0 : fused_mul_add(seg.begin, load1 - load0, load0),
-                           seg.end == 1.0 ? load1 : fused_mul_add(seg.end, load1 - load0, load0)};
+    const SegmentLoads<double> l = segment_loads<double>(seg, q3, mu, load0, load1);
+    const SegmentInputs in{H,    seg.stiffness_start, seg.stiffness_mid, seg.stiffness_end, b, alpha, l.qa, l.qm,
+                           l.qb, l.la,                l.lb,              seg.error_start,   seg.error_end};
+    const located::BranchInputs bi{in.Ka, in.Km, in.Kb, in.qa, in.qm, in.qb, in.la, in.lb,
+                                   in.ea, in.eb, (in.eb - in.ea) / H};
     double d1 = d, v1 = v, x[3];
     Tangent t1 = tangent;
-    located::branch_rk4(branch_of(d, b), H, in.K, b, alpha, in.qa, in.qm, in.qb, in.la, in.lb, d1, v1, t1, x);
-    if (boundary_proximity<double, double>(H, b, d, x[0], x[1], x[2], d1, v, v1) <= 0.0) {
+    located::branch_rk4(branch_of(d - in.ea, b), H, bi, b, alpha, d1, v1, t1, x);
+    if (boundary_proximity<double, double>(H, b, in.ea, in.eb, d, x[0], x[1], x[2], d1, v, v1) <= 0.0) {
       located_segment(in, d, v, tangent);
     } else {
       d = d1, v = v1, tangent = t1;

@@ -1,23 +1,29 @@
-// Kinematic mesh timing (doc/model.md D3): the mesh phase, the stiffness K(phi) and the friction
-// factor f(phi) as known functions of time, and how each integration step is split at the
-// stiffness switches (doc/model.md §5). Shared by every realization of a block.
+// Kinematic mesh timing (doc/model.md D3): the mesh phase, the stiffness K, the friction factor f
+// and the static transmission error e as known functions of time, and how each integration step is
+// split at their jumps (doc/model.md §5). Shared by every realization of a block.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 
 #include "gear_dynamics/model/gear_pair.hpp"
+#include "gear_dynamics/model/mesh_table.hpp"
 
 namespace gear_dynamics {
 
-// A piece [begin, end] (fractions of h) of one integration step with constant stiffness.
+// A piece [begin, end] (fractions of h) of one integration step on which K, f and e are smooth.
 struct StepSegment {
   double begin = 0.0, end = 1.0;
-  double stiffness = 0.0;  // K on the open segment [N/m]
-  // Friction factor f at the RK4 stage times: segment start, midpoint, end [1/kg]. An unsplit
-  // step evaluates it at the stage times; a split sub-step freezes it at its midpoint.
+  // K at the RK4 stage times: segment start, midpoint, end [N/m] (one value on the paper's mesh).
+  double stiffness_start = 0.0, stiffness_mid = 0.0, stiffness_end = 0.0;
+  // Friction factor f at the stage times [1/kg]. On the paper's mesh an unsplit step evaluates it
+  // at the stage times and a split sub-step freezes it at its midpoint.
   double friction_start = 0.0, friction_mid = 0.0, friction_end = 0.0;
+  // Static transmission error at the segment's start and end [m], a straight line between.
+  double error_start = 0.0, error_end = 0.0;
 };
 
 struct StepPlan {
@@ -34,20 +40,28 @@ class MeshSchedule {
   inline StepPlan plan(std::int64_t n) const;
 
   double phase(double t) const;      // phi(t) in [0, phi_n) [rad]
-  double stiffness(double t) const;  // K(phi(t)) [N/m]
+  double stiffness(double t) const;  // K(t) [N/m]
+  double transmission_error(double t) const;  // e(t) [m]
+  // K at the unwrapped pinion angle a = phi0 + Omega t, i.e. theta1 from the model's theta1 = 0.
+  double stiffness_at_angle(double a) const;
+  // The table behind a mesh that is not the paper's (null on the paper's).
+  const MeshTable* table() const { return table_.get(); }
 
  private:
   double angle(double t) const { return phase0_ + speed_ * t; }  // unwrapped phi0 + Omega t
   double stiffness_at_local(double phi) const { return phi < single_ ? k1_ : k2_; }
+  StepPlan plan_from_table(double a0, double a1) const;
 
   GearPair gear_;
   double h_, phase0_, speed_, period_, single_, k1_, k2_;
+  std::shared_ptr<const MeshTable> table_;
 };
 
 inline StepPlan MeshSchedule::plan(std::int64_t n) const {
   StepPlan p;
   const double a0 = angle(static_cast<double>(n) * h_);
   const double a1 = angle(static_cast<double>(n + 1) * h_);
+  if (table_) return plan_from_table(a0, a1);
 
   // Switch angles strictly inside the step. One that falls within a billionth of a step of a grid
   // point counts as on the grid point, so rounding never creates a sliver sub-step.
@@ -68,7 +82,7 @@ inline StepPlan MeshSchedule::plan(std::int64_t n) const {
     const double mid = 0.5 * (a0 + a1);
     const double cycle = std::floor(mid / period_);
     StepSegment& s = p.segment[0];
-    s.stiffness = stiffness_at_local(local(mid, cycle));
+    s.stiffness_start = s.stiffness_mid = s.stiffness_end = stiffness_at_local(local(mid, cycle));
     s.friction_start = gear_.friction_factor(local(a0, cycle));
     s.friction_mid = gear_.friction_factor(local(mid, cycle));
     s.friction_end = gear_.friction_factor(local(a1, cycle));
@@ -85,7 +99,7 @@ inline StepPlan MeshSchedule::plan(std::int64_t n) const {
     StepSegment& s = p.segment[i];
     s.begin = (edges[i] - a0) / (a1 - a0);
     s.end = (edges[i + 1] - a0) / (a1 - a0);
-    s.stiffness = stiffness_at_local(local(mid, cycle));
+    s.stiffness_start = s.stiffness_mid = s.stiffness_end = stiffness_at_local(local(mid, cycle));
     s.friction_start = s.friction_mid = s.friction_end = gear_.friction_factor(local(mid, cycle));
   }
   p.segment[0].begin = 0.0;

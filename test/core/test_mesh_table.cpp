@@ -1,0 +1,221 @@
+// The tabulated mesh (doc/model.md §3, §5): friction that reverses at the pitch point, profile
+// errors, the schedule period, the step plans at the jumps, and the kernel with a transmission
+// error against closed forms.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numeric>
+#include <string>
+
+#include "gear_dynamics/config/config.hpp"
+#include "gear_dynamics/engine/ensemble.hpp"
+#include "gear_dynamics/engine/rk4_kernel.hpp"
+#include "gear_dynamics/model/mesh_schedule.hpp"
+#include "gear_dynamics/model/mesh_table.hpp"
+
+namespace gd = gear_dynamics;
+
+namespace {
+
+gd::ModelConfig paper_config() {
+  const std::string dir = GEAR_DYNAMICS_CONFIG_DIR;
+  return gd::parse_config(gd::read_yaml_files({dir + "/gear_pair.yaml", dir + "/load.yaml", dir + "/run.yaml"}));
+}
+
+gd::GearPair reversing_square_wave() {
+  gd::GearInputs in;
+  in.friction_direction = gd::FrictionDirection::kReversing;
+  return gd::derive(in);
+}
+
+}  // namespace
+
+TEST(MeshTable, PaperMeshNeedsNoTable) {
+  EXPECT_TRUE(gd::is_paper_mesh(gd::GearInputs{}));
+  EXPECT_EQ(gd::MeshSchedule(gd::derive(gd::GearInputs{}), 2.5e-6).table(), nullptr);
+  EXPECT_FALSE(gd::is_paper_mesh(reversing_square_wave().in));
+}
+
+// The square wave through the table: k1 in single contact, k2 as two equal shares in double contact.
+TEST(MeshTable, SquareWaveLevelsThroughTheTable) {
+  const gd::GearPair g = reversing_square_wave();
+  const gd::MeshTable t(g);
+  EXPECT_EQ(t.mesh_periods(), 1);
+  for (double u : {0.01, 0.3, 0.59}) EXPECT_EQ(t.at(u * g.single_pair_angle).stiffness, g.k1) << u;
+  for (double u : {0.01, 0.5, 0.99}) {
+    const double phi = g.single_pair_angle + u * (g.mesh_period_angle - g.single_pair_angle);
+    EXPECT_EQ(t.at(phi).stiffness, g.k2) << u;
+    const auto c = t.contacts(phi);
+    ASSERT_EQ(c.size(), 2u);
+    EXPECT_EQ(c[0].stiffness, 0.5 * g.k2);
+  }
+}
+
+// Friction reverses at the pitch point: Q = q3 + mu sgn(x - x_p) (c0 + c1 x) for the one pair in
+// single contact (doc/model.md §2), the paper's sign beyond it; the pitch point is a jump.
+TEST(MeshTable, FrictionReversesAtThePitchPoint) {
+  const gd::GearPair g = reversing_square_wave();
+  const gd::MeshTable t(g);
+  const double phi_p = (g.x_p - g.x_b) / g.base_radius1;
+  ASSERT_GT(phi_p, 0.0);
+  ASSERT_LT(phi_p, g.single_pair_angle);  // the pitch point lies in single contact for this gear
+  bool has_break = false;
+  for (double b : t.breaks()) has_break = has_break || std::abs(b - phi_p) < 1e-12;
+  EXPECT_TRUE(has_break);
+  for (double phi : {0.2 * phi_p, 0.9 * phi_p, 1.1 * phi_p, 0.5 * (phi_p + g.single_pair_angle)}) {
+    const double x = g.x_b + g.base_radius1 * phi, sign = x >= g.x_p ? 1.0 : -1.0;
+    EXPECT_NEAR(t.at(phi).friction, sign * (g.c0 + g.c1 * x), 1e-9 * g.c0) << phi;
+  }
+  // Double contact: both pairs past (or before) the pitch point, each with half the force.
+  const double phi = g.single_pair_angle + 0.5 * (g.mesh_period_angle - g.single_pair_angle);
+  const double xr = g.x_b + g.base_radius1 * phi, xn = g.x_a + g.base_radius1 * (phi - g.single_pair_angle);
+  const double expected = 0.5 * ((xr >= g.x_p ? 1 : -1) * (g.c0 + g.c1 * xr) + (xn >= g.x_p ? 1 : -1) * (g.c0 + g.c1 * xn));
+  EXPECT_NEAR(t.at(phi).friction, expected, 1e-9 * g.c0);
+}
+
+// Profile errors: the schedule covers the revolutions of the gears whose teeth differ, and e is
+// the error of the pair in single contact, the stiffness-weighted mean of the two in double contact.
+TEST(MeshTable, ProfileErrorsSetThePeriodAndTheExcitation) {
+  gd::GearInputs in;
+  in.profile_errors.pinion = {1e-6, 0.0, -2e-6};
+  EXPECT_EQ(gd::schedule_mesh_periods(in), in.pinion_teeth);
+  in.profile_errors.wheel = {0.0, 3e-7};
+  EXPECT_EQ(gd::schedule_mesh_periods(in), std::lcm(in.pinion_teeth, in.gear_teeth));
+  in.profile_errors.pinion.clear();
+  EXPECT_EQ(gd::schedule_mesh_periods(in), in.gear_teeth);
+  in.profile_errors.pinion = {1e-6, 0.0, -2e-6};
+  const gd::GearPair g = gd::derive(in);
+  const gd::MeshTable t(g);
+  const double pn = g.mesh_period_angle, pm = g.single_pair_angle;
+  const auto err = [&](long pair) {
+    const long i = pair % in.pinion_teeth, j = pair % in.gear_teeth;
+    return (i < 3 ? in.profile_errors.pinion[i] : 0.0) + (j < 2 ? in.profile_errors.wheel[j] : 0.0);
+  };
+  for (long m : {0L, 1L, 2L, 21L, 79L}) {
+    EXPECT_NEAR(t.at(m * pn + 0.5 * pm).error, err(m), 1e-20) << m;
+    EXPECT_NEAR(t.at(m * pn + 0.5 * (pm + pn)).error, 0.5 * (err(m) + err(m + 1)), 1e-20) << m;
+  }
+}
+
+// A step that holds a jump is split there; each piece takes its own side's values.
+TEST(MeshTable, PlansSplitAtTheJumps) {
+  const gd::GearPair g = reversing_square_wave();
+  const double h = 2.5e-6;
+  const gd::MeshSchedule mesh(g, h);
+  const double phi_p = (g.x_p - g.x_b) / g.base_radius1;
+  const std::int64_t n = static_cast<std::int64_t>(std::floor(phi_p / g.in.pinion_speed / h));
+  const gd::StepPlan p = mesh.plan(n);
+  ASSERT_EQ(p.segments, 2);
+  EXPECT_NEAR(p.segment[0].end, (phi_p / g.in.pinion_speed - n * h) / h, 1e-9);
+  EXPECT_LT(p.segment[0].friction_end, 0.0);  // before the pitch point: reversed
+  EXPECT_GT(p.segment[1].friction_start, 0.0);
+  // Each side is taken a billionth of its piece inside it: x moves by at most Rb1 1e-9 phi_n.
+  EXPECT_NEAR(-p.segment[0].friction_end, p.segment[1].friction_start, 2.0 * g.c1 * g.base_radius1 * 1e-9 * g.mesh_period_angle);
+  EXPECT_EQ(p.segment[0].stiffness_end, g.k1);
+}
+
+// Every profile error the same: e is that constant, and the motion is the paper's shifted by it
+// (the boundaries and the spring move together), to rounding over the first 20 ms.
+TEST(MeshTable, EqualProfileErrorsShiftTheMotion) {
+  gd::GearInputs in;
+  const double c = 3e-6;
+  in.profile_errors.pinion.assign(in.pinion_teeth, c);
+  const gd::GearPair g0 = gd::derive(gd::GearInputs{}), g1 = gd::derive(in);
+  const double h = 2.5e-6;
+  gd::Ensemble a(g0, h, {0.0, 0.0}, {gd::LaneSpec{0.04, 0.0, 0.0, 20.0, 0.0, 0, false}}, 1);
+  gd::Ensemble b(g1, h, {c, 0.0}, {gd::LaneSpec{0.04, 0.0, 0.0, 20.0, 0.0, 0, false}}, 1);
+  EXPECT_NE(b.mesh().table(), nullptr);
+  double worst = 0.0;
+  for (int n = 0; n < 8000; ++n) {
+    a.step(), b.step();
+    worst = std::max(worst, std::abs(b.delta()[0] - c - a.delta()[0]));
+  }
+  EXPECT_LT(worst, 1e-12) << "largest |delta_e - e - delta_0| [m]";
+}
+
+// The kernel with e(t) = c t in permanent contact without backlash or damping (b = 0, alpha = 0,
+// frozen K): delta = F/(qK) (1 - cos wt) + c (t - sin(wt)/w) from rest. RK4's error shrinks as h^4.
+TEST(MeshTable, KernelFollowsALinearTransmissionError) {
+  const double K = 1.3447321e8, q = 19.143710, F = 20.0, c = 1e-3, w = std::sqrt(q * K);
+  const auto run = [&](double h) {
+    double d = 0.0, v = 0.0, worst = 0.0;
+    const int N = static_cast<int>(std::round(1e-3 / h));
+    for (int n = 0; n < N; ++n) {
+      gd::StepPlan p;
+      gd::StepSegment& s = p.segment[0];
+      s.stiffness_start = s.stiffness_mid = s.stiffness_end = K;
+      s.error_start = c * n * h, s.error_end = c * (n + 1) * h;
+      gd::kernel::rk4_step<double>(p, h, 0.0, 0.0, q, 0.0, F, F, d, v);
+      const double t = (n + 1) * h;
+      worst = std::max(worst, std::abs(d - (F / (q * K) * (1 - std::cos(w * t)) + c * (t - std::sin(w * t) / w))));
+    }
+    return worst;
+  };
+  const double scale = F / (q * K) + c / w, e1 = run(1e-6), e2 = run(0.5e-6);
+  EXPECT_LT(e1, 1e-3 * scale);
+  EXPECT_GT(e1 / e2, 12.0) << e1 << " " << e2;
+}
+
+// A boundary that moves (b + c t) is located: free flight, impact, rebound; the state 1 ms after
+// converges at fourth order (error against h/8 shrinks >= 10x per halving).
+TEST(MeshTable, MovingBoundaryIsLocated) {
+  const gd::GearPair g = gd::derive(gd::GearInputs{});
+  const double K = g.k1, q = g.q3, b = g.in.backlash, alpha = g.damping_coefficient, F = 20.0, c = -4e-3;
+  const auto run = [&](double h) {
+    double d = 0.0, v = 0.0;
+    const int N = static_cast<int>(std::round(3.2e-3 / h));
+    for (int n = 0; n < N; ++n) {
+      gd::StepPlan p;
+      gd::StepSegment& s = p.segment[0];
+      s.stiffness_start = s.stiffness_mid = s.stiffness_end = K;
+      s.error_start = c * n * h, s.error_end = c * (n + 1) * h;
+      gd::kernel::rk4_step<double>(p, h, b, alpha, q, 0.0, F, F, d, v);
+    }
+    return d;
+  };
+  const double ref = run(0.125e-6), e1 = std::abs(run(2e-6) - ref), e2 = std::abs(run(1e-6) - ref),
+               e3 = std::abs(run(0.5e-6) - ref);
+  EXPECT_GT(e1 / e2, 10.0) << e1 << " " << e2;
+  EXPECT_GT(e2 / e3, 10.0) << e2 << " " << e3;
+}
+
+// The configuration refuses what the model cannot take, naming the key.
+TEST(MeshTable, ConfigRefusesFaultsWithoutGeometry) {
+  gd::ModelConfig c = paper_config();
+  YAML::Node root = gd::to_yaml(c);
+  root["gear_pair"]["crack_gear"] = "pinion";
+  root["gear_pair"]["crack_depth"] = 0.5e-3;
+  try {
+    gd::parse_config(root);
+    FAIL() << "a crack on the square wave was accepted";
+  } catch (const gd::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("gear_pair.crack_depth = 0.0005 m needs gear_pair.mesh_stiffness"),
+              std::string::npos)
+        << e.what();
+  }
+  root["gear_pair"]["mesh_stiffness"] = "potential_energy";
+  root["gear_pair"]["crack_tooth"] = 20;
+  try {
+    gd::parse_config(root);
+    FAIL() << "crack_tooth 20 of 20 teeth was accepted";
+  } catch (const gd::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("gear_pair.crack_tooth = 20 is out of range; allowed [0, 19]"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// Random profile errors come from the seed: the same seed, the same errors; another, others.
+TEST(MeshTable, RandomProfileErrorsFollowTheSeed) {
+  gd::ModelConfig c = paper_config();
+  YAML::Node root = gd::to_yaml(c);
+  root["gear_pair"]["profile_error_sd"] = 2e-6;
+  const gd::ModelConfig a = gd::parse_config(root), b = gd::parse_config(root);
+  ASSERT_EQ(a.gear.profile_errors.pinion.size(), static_cast<std::size_t>(c.gear.pinion_teeth));
+  ASSERT_EQ(a.gear.profile_errors.wheel.size(), static_cast<std::size_t>(c.gear.gear_teeth));
+  EXPECT_EQ(a.gear.profile_errors.wheel, b.gear.profile_errors.wheel);
+  root["run"]["seed"] = 7;
+  EXPECT_NE(gd::parse_config(root).gear.profile_errors.pinion, a.gear.profile_errors.pinion);
+  // The YAML keeps the settings, not the draws: parsing it again gives the same errors.
+  EXPECT_EQ(gd::parse_config(gd::to_yaml(a)).gear.profile_errors.pinion, a.gear.profile_errors.pinion);
+}
