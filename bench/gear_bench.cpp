@@ -32,6 +32,7 @@ struct Options {
   int threads = 1, block = 32, repeat = 3;
   bool noise = true;
   std::string output = "-";
+  std::vector<std::string> sets;
 };
 
 Options parse(int argc, char** argv) {
@@ -56,7 +57,13 @@ Options parse(int argc, char** argv) {
                "engine only: R copies of the deterministic run S1, lanes without random streams: the engine "
                "without the normal generation");
   app.add_option("--output", o.output, "JSON output ('-' = stdout)")->type_name("FILE")->capture_default_str();
+  gd::tools::add_repeatable(app, "--set", o.sets,
+                            "engine only: override one model parameter, e.g. --set gear_pair.mesh_stiffness="
+                            "potential_energy (repeatable)")
+      ->type_name("SEC.KEY=VAL");
   gd::tools::parse_or_exit(app, argc, argv);
+  if (!o.sets.empty() && o.mode != "engine")
+    throw std::runtime_error("--set is for the engine mode only (the numpy, Octave and scalar versions know the paper's model)");
   if (o.realizations < 1) throw std::runtime_error("--realizations must be >= 1");
   if (o.threads < 1 || o.block < 1 || o.repeat < 1)
     throw std::runtime_error("--threads, --block and --repeat must be >= 1");
@@ -65,10 +72,11 @@ Options parse(int argc, char** argv) {
   return o;
 }
 
-gd::ModelConfig default_config() {
+gd::ModelConfig default_config(const std::vector<std::string>& sets = {}) {
   const std::string dir = GEAR_DYNAMICS_CONFIG_DIR;
-  return gd::parse_config(
-      gd::read_yaml_files({dir + "/gear_pair.yaml", dir + "/load.yaml", dir + "/run.yaml"}));
+  YAML::Node root = gd::read_yaml_files({dir + "/gear_pair.yaml", dir + "/load.yaml", dir + "/run.yaml"});
+  for (const std::string& s : sets) gd::tools::apply_set(root, s);
+  return gd::parse_config(root);
 }
 
 std::string json_array(const std::vector<double>& v) {
@@ -181,7 +189,7 @@ void check_scalar(const gd::ModelConfig& c, std::int64_t steps, std::int64_t eve
 
 int main(int argc, char** argv) try {
   const Options o = parse(argc, argv);
-  const gd::ModelConfig c = default_config();
+  const gd::ModelConfig c = default_config(o.sets);
   if (o.mode == "params") {
     write(o.output, gear_bench::params_json(c));
     return 0;

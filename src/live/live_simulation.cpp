@@ -407,7 +407,9 @@ LiveSample LiveSimulation::sample() const {
 
 void LiveSimulation::take_spectrum_sample(std::int64_t n) {
   const Realization& e = realization_;
-  spectrum_samples_.push(e.delta(), mesh_force(gear_, e.mesh().stiffness(e.time()), e.delta(), e.velocity()));
+  const double t = e.time();
+  spectrum_samples_.push(e.delta(), mesh_force(gear_, e.mesh().stiffness(t), e.delta() - e.mesh().transmission_error(t),
+                                               e.velocity()));
   next_sample_ += spectrum_.sample_steps;
   if (n != next_update_) return;
   next_update_ += spectrum_.update_steps;

@@ -24,15 +24,20 @@ double MeshSchedule::phase(double t) const {
 double MeshSchedule::stiffness(double t) const { return stiffness_at_angle(angle(t)); }
 
 double MeshSchedule::stiffness_at_angle(double a) const {
-  const double P = table_ ? table_->period() : period_;
-  const double local = a - std::floor(a / P) * P;
-  return table_ ? table_->at(local).stiffness : stiffness_at_local(local);
+  return table_ ? table_->at(table_angle(a)).stiffness : stiffness_at_local(a - std::floor(a / period_) * period_);
 }
 
 double MeshSchedule::transmission_error(double t) const {
-  if (!table_) return 0.0;
-  const double a = angle(t), P = table_->period();
-  return table_->at(a - std::floor(a / P) * P).error;
+  return table_ ? table_->at(table_angle(angle(t))).error : 0.0;
+}
+
+// The table's local angle of a, a billionth of a step past it: at a jump that falls on a sample
+// time (a mesh period is often a whole number of steps) the value after it, whatever the rounding
+// of a.
+double MeshSchedule::table_angle(double a) const {
+  const double P = table_->period();
+  const double local = a - std::floor(a / P) * P + 1e-9 * speed_ * h_;
+  return local >= P ? local - P : local;
 }
 
 // The step [a0, a1] (unwrapped angles) cut at the table's jumps inside it; each segment takes K, f

@@ -171,31 +171,22 @@ double since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// The lines n f_m + k f_r (f_r the rotation frequency of the gear whose teeth differ, k = -K..K,
-// k != 0) of a spectrum: a line is found where the largest bin within one bin of it is a local
-// maximum. Printed and written as PREFIX_sidebands.csv.
+// The sidebands of the gear whose teeth differ (f_r its rotation frequency), printed and written
+// as PREFIX_sidebands.csv.
 void write_sidebands(const Options& o, const std::vector<double>& f, const std::vector<double>& d, double fm,
                      double fr, int harmonics) {
   const int K = static_cast<int>(o.get("sidebands", 3));
-  const double df = f[1] - f[0];
   std::ofstream sb = open_csv(o, "sidebands");
   sb << "harmonic,order,frequency,bin_frequency,density,line\n";
-  int found = 0, total = 0;
-  for (int n = 1; n <= harmonics; ++n) {
-    for (int k = -K; k <= K; ++k) {
-      const double target = n * fm + k * fr;
-      const long j = std::lround(target / df);
-      if (k == 0 || j < 2 || j + 2 >= static_cast<long>(d.size())) continue;
-      long m = j;
-      for (long i = j - 1; i <= j + 1; ++i)
-        if (d[i] > d[m]) m = i;
-      const bool line = d[m] > d[m - 1] && d[m] > d[m + 1];
-      found += line, ++total;
-      sb << n << "," << k << "," << target << "," << f[m] << "," << d[m] << "," << (line ? 1 : 0) << "\n";
-    }
+  int found = 0;
+  const std::vector<gd::Sideband> lines = gd::sidebands(f, d, fm, fr, harmonics, K);
+  for (const gd::Sideband& s : lines) {
+    sb << s.harmonic << "," << s.order << "," << s.frequency << "," << s.bin_frequency << "," << s.density << ","
+       << (s.line ? 1 : 0) << "\n";
+    found += s.line;
   }
-  std::printf("sidebands of the mesh force at n f_m + k f_r (f_r = %.6g Hz, |k| <= %d): %d of %d are lines\n", fr, K,
-              found, total);
+  std::printf("sidebands of the mesh force at n f_m + k f_r (f_r = %.6g Hz, |k| <= %d): %d of %zu are lines\n", fr, K,
+              found, lines.size());
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -244,11 +235,16 @@ int spectrum(const Options& o) {
   // folds back from above Nyquist, and a coarser grid would fold more.
   const int k = static_cast<int>(o.get("decimate", std::max(1.0, std::round(1e-5 / h))));
   const double fs = 1.0 / (k * h), fm = 1.0 / gd::mesh_period(g);
-  // Default segment: 30 mesh periods, so that every mesh harmonic falls on a bin centre; with a
-  // faulty or uneven gear whole revolutions of it, so that its sidebands do too.
+  // Default segment: 30 mesh periods, so that every mesh harmonic falls on a bin centre. With a
+  // gear whose teeth differ, whole schedule periods (revolutions), up to 4 while the run holds two
+  // segments: its sidebands then fall on bin centres too, 4 bins from the harmonics, clear of the
+  // Hann window's leakage of a harmonic into its neighbouring bins.
   const gd::MeshSchedule schedule(g, h);
   const int periods = schedule.table() ? schedule.table()->mesh_periods() : 1;
-  const double seg_default = std::round(std::ceil(30.0 / periods) * periods * gd::mesh_period(g) * fs);
+  const double available = (c.run.duration - transient) / gd::mesh_period(g);
+  const int revolutions = std::max(1, std::min(4, static_cast<int>(available / (2.0 * periods))));
+  const double seg_default =
+      std::round((periods > 1 ? revolutions * periods : 30.0) * gd::mesh_period(g) * fs);
   gd::WelchOptions w{static_cast<std::size_t>(o.get("segment", seg_default)), o.get("overlap", 0.5)};
   std::vector<gd::LaneSpec> lanes{gd::deterministic_lane(c, c.friction_coefficient)};
   for (int r = 0; r < R; ++r) lanes.push_back(gd::stochastic_lane(c, c.friction_coefficient, r));

@@ -4,8 +4,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <numeric>
 #include <string>
+#include <vector>
 
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
@@ -218,4 +220,61 @@ TEST(MeshTable, RandomProfileErrorsFollowTheSeed) {
   EXPECT_NE(gd::parse_config(root).gear.profile_errors.pinion, a.gear.profile_errors.pinion);
   // The YAML keeps the settings, not the draws: parsing it again gives the same errors.
   EXPECT_EQ(gd::parse_config(gd::to_yaml(a)).gear.profile_errors.pinion, a.gear.profile_errors.pinion);
+}
+
+// A root crack in pinion tooth 0 lowers K only while that tooth is in contact (pair 0: mesh period
+// 0 throughout, and the double contact at the end of mesh period Z1 - 1), and lowers it more the
+// deeper the crack; elsewhere K is the healthy gear's.
+TEST(MeshTable, CrackLowersOnlyTheCrackedToothsPairs) {
+  gd::GearInputs in;
+  in.mesh_stiffness = gd::MeshStiffnessModel::kPotentialEnergy;
+  const gd::GearPair healthy = gd::derive(in);
+  const gd::MeshTable h(healthy);
+  ASSERT_EQ(h.mesh_periods(), 1);
+  const double pn = healthy.mesh_period_angle, pm = healthy.single_pair_angle;
+  const int Z1 = in.pinion_teeth;
+  std::vector<double> previous;
+  for (double depth : {0.25e-3, 0.5e-3, 1.0e-3, 1.5e-3}) {
+    in.crack = {gd::FaultyGear::kPinion, 0, depth, 0.7853981633974483};
+    const gd::MeshTable t(gd::derive(in));
+    ASSERT_EQ(t.mesh_periods(), Z1);
+    std::vector<double> lowered;
+    for (int i = 0; i < 40 * Z1; ++i) {
+      const double a = (i + 0.5) * pn / 40, local = std::fmod(a, pn);
+      const int m = static_cast<int>(a / pn);
+      const bool in_contact = m == 0 || (m == Z1 - 1 && local > pm);
+      const double K = t.at(a).stiffness, K0 = h.at(local).stiffness;
+      if (in_contact) {
+        EXPECT_LT(K, K0 * (1 - 1e-4)) << "depth " << depth << " at " << a << " rad";
+        lowered.push_back(K);
+      } else {
+        EXPECT_NEAR(K, K0, 1e-9 * K0) << "depth " << depth << " at " << a << " rad";
+      }
+    }
+    for (std::size_t k = 0; k < lowered.size() && !previous.empty(); ++k) {
+      EXPECT_LT(lowered[k], previous[k]) << "depth " << depth;
+    }
+    previous = lowered;
+  }
+}
+
+// The table's linear interpolation stays within 0.1 % of the model everywhere (the nodes are
+// refined to 1e-4 at the midpoints; checked here at other points, on a cracked gear).
+TEST(MeshTable, InterpolationWithinATenthOfAPercent) {
+  gd::GearInputs in;
+  in.mesh_stiffness = gd::MeshStiffnessModel::kPotentialEnergy;
+  in.friction_direction = gd::FrictionDirection::kReversing;
+  in.crack = {gd::FaultyGear::kPinion, 3, 1.0e-3, 0.7853981633974483};
+  const gd::GearPair g = gd::derive(in);
+  const gd::MeshTable t(g);
+  double worst = 0.0;
+  for (int i = 0; i < 20000; ++i) {
+    const double a = (i + 0.37) * t.period() / 20000;
+    const int p = t.piece_of(a);
+    const double K = t.at(p, a).stiffness, exact = t.exact(p, a).stiffness;
+    worst = std::max(worst, std::abs(K - exact) / exact);
+  }
+  EXPECT_LT(worst, 1e-3);
+  std::printf("table: %d pieces, %d nodes over %d mesh periods; largest interpolation error %.2e of K\n",
+              t.pieces(), t.nodes(), t.mesh_periods(), worst);
 }

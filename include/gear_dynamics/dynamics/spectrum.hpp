@@ -46,6 +46,19 @@ struct SpectralPeak {
   bool is_harmonic = false;
   double prominence = 0;  // harmonics: density / median density of the bins 3..10 away (1: no line)
 };
+// The sidebands n f_m + k f_r (n = 1 .. harmonics, k = -orders .. orders but 0) that a gear whose
+// teeth differ (a fault, profile errors) puts around the mesh harmonics, f_r its rotation frequency.
+// A sideband is a line where the largest bin within one bin of it is a local maximum.
+struct Sideband {
+  int harmonic = 0, order = 0;
+  double frequency = 0;      // n f_m + k f_r [Hz]
+  double bin_frequency = 0;  // the largest bin within one bin of it [Hz]
+  double density = 0;
+  bool line = false;
+};
+std::vector<Sideband> sidebands(const std::vector<double>& frequency, const std::vector<double>& density,
+                                double mesh_frequency, double rotation_frequency, int harmonics, int orders);
+
 std::vector<SpectralPeak> mark_peaks(const std::vector<double>& frequency, const std::vector<double>& density,
                                      double mesh_frequency, int harmonics = 5, int sidebands = 8);
 

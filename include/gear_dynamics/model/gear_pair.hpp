@@ -108,7 +108,8 @@ double first_mesh_period_start(const GearPair& gear);
 
 // Mesh force F_c = K g(delta) + alpha |g(delta)| delta_dot [N] (doc/model.md §2, without the friction
 // factor), g(delta) = delta - clamp(delta, -b, b) the tooth deflection beyond the backlash; the
-// quantity whose spectrum gear_analyze and the live node's spectrum topic show.
+// quantity whose spectrum gear_analyze and the live node's spectrum topic show. With a static
+// transmission error e the callers pass delta - e.
 inline double mesh_force(const GearPair& gear, double stiffness, double delta, double delta_dot) {
   const double b = gear.in.backlash;
   const double g = delta - std::min(std::max(delta, -b), b);  // as kernel::clamp

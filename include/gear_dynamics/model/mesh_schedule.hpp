@@ -40,8 +40,9 @@ class MeshSchedule {
   inline StepPlan plan(std::int64_t n) const;
 
   double phase(double t) const;      // phi(t) in [0, phi_n) [rad]
-  double stiffness(double t) const;  // K(t) [N/m]
-  double transmission_error(double t) const;  // e(t) [m]
+  // K(t) [N/m] and e(t) [m]; on a table, the values just after t (after a jump at t).
+  double stiffness(double t) const;
+  double transmission_error(double t) const;
   // K at the unwrapped pinion angle a = phi0 + Omega t, i.e. theta1 from the model's theta1 = 0.
   double stiffness_at_angle(double a) const;
   // The table behind a mesh that is not the paper's (null on the paper's).
@@ -51,6 +52,7 @@ class MeshSchedule {
   double angle(double t) const { return phase0_ + speed_ * t; }  // unwrapped phi0 + Omega t
   double stiffness_at_local(double phi) const { return phi < single_ ? k1_ : k2_; }
   StepPlan plan_from_table(double a0, double a1) const;
+  double table_angle(double a) const;
 
   GearPair gear_;
   double h_, phase0_, speed_, period_, single_, k1_, k2_;
