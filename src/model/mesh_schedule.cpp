@@ -72,6 +72,7 @@ StepPlan MeshSchedule::plan_from_table(double a0, double a1) const {
     s.stiffness_start = v0.stiffness, s.stiffness_mid = vm.stiffness, s.stiffness_end = v1.stiffness;
     s.friction_start = v0.friction, s.friction_mid = vm.friction, s.friction_end = v1.friction;
     s.error_start = v0.error, s.error_end = v1.error;
+    p.excited = p.excited || s.error_start != 0.0 || s.error_end != 0.0;
   }
   return p;
 }

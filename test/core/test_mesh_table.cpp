@@ -144,6 +144,7 @@ TEST(MeshTable, KernelFollowsALinearTransmissionError) {
     const int N = static_cast<int>(std::round(1e-3 / h));
     for (int n = 0; n < N; ++n) {
       gd::StepPlan p;
+      p.excited = true;
       gd::StepSegment& s = p.segment[0];
       s.stiffness_start = s.stiffness_mid = s.stiffness_end = K;
       s.error_start = c * n * h, s.error_end = c * (n + 1) * h;
@@ -168,6 +169,7 @@ TEST(MeshTable, MovingBoundaryIsLocated) {
     const int N = static_cast<int>(std::round(3.2e-3 / h));
     for (int n = 0; n < N; ++n) {
       gd::StepPlan p;
+      p.excited = true;
       gd::StepSegment& s = p.segment[0];
       s.stiffness_start = s.stiffness_mid = s.stiffness_end = K;
       s.error_start = c * n * h, s.error_end = c * (n + 1) * h;

@@ -112,14 +112,21 @@ inline Lanes<N> magnitude(const Lanes<N>& x) {
 // Eq. 15 with doc/model.md D1/D2: backlash in stiffness and damping, Hunt-Crossley |g|, the static
 // transmission error e (rate e_dot) as a displacement excitation:
 // load - q (K g(delta - e) + alpha |g| (v - e_dot)), v entering by the last two roundings (it is
-// the stages' chain). S is double or, for lanes of different gear pairs (GearLanes), P.
-template <class P, class S>
+// the stages' chain). S is double or, for lanes of different gear pairs (GearLanes), P. Without
+// an excitation (kExcited false: e = 0) the two subtractions stay out of the stages' chain.
+template <class P, class S, bool kExcited>
 GD_KERNEL_INLINE P acceleration(const P& d, const P& v, const P& load, const S& stiffness, const P& q, const S& b,
                                 const S& alpha, const S& e, const S& e_dot) {
-  const P x = d - e;
-  const P g = x - clamp(x, b);
-  const P force = fused_mul_add(P(alpha * magnitude(g)), P(v - e_dot), P(stiffness * g));
-  return fused_neg_mul_add(q, force, load);
+  if constexpr (kExcited) {
+    const P x = d - e;
+    const P g = x - clamp(x, b);
+    const P force = fused_mul_add(P(alpha * magnitude(g)), P(v - e_dot), P(stiffness * g));
+    return fused_neg_mul_add(q, force, load);
+  } else {
+    const P g = d - clamp(d, b);
+    const P force = fused_mul_add(P(alpha * magnitude(g)), v, P(stiffness * g));
+    return fused_neg_mul_add(q, force, load);
+  }
 }
 
 // Load (Eq. 19) at the end of the step: exact in distribution on the grid; z is the step's normal.
@@ -144,13 +151,17 @@ inline Lanes<N> maximum(const Lanes<N>& a, const Lanes<N>& b) {
 // overshoot its end values (4/27 (|m0| + |m1|), taken as 1/4), and shifted by e (widened by its
 // change over the step), contains b or -b. Elsewhere every stage saw one smooth branch and the dense
 // output stays on it, so the step is the located step, bit for bit.
-template <class P, class S>
+template <class P, class S, bool kExcited = true>
 GD_KERNEL_INLINE P boundary_proximity(double H, const S& b, const S& ea, const S& eb, const P& d0, const P& x2,
                                       const P& x3, const P& x4, const P& d1, const P& v0, const P& v1) {
   const P reach = (0.25 * H) * P(magnitude(v0) + magnitude(v1));
-  const S spread = magnitude(S(eb - ea));
-  const P lo = P(P(minimum(minimum(minimum(d0, x2), minimum(x3, x4)), d1) - reach) - S(ea + spread));
-  const P hi = P(P(maximum(maximum(maximum(d0, x2), maximum(x3, x4)), d1) + reach) - S(ea - spread));
+  P lo = P(minimum(minimum(minimum(d0, x2), minimum(x3, x4)), d1) - reach);
+  P hi = P(maximum(maximum(maximum(d0, x2), maximum(x3, x4)), d1) + reach);
+  if constexpr (kExcited) {
+    const S spread = magnitude(S(eb - ea));
+    lo = P(lo - S(ea + spread));
+    hi = P(hi - S(ea - spread));
+  }
   return minimum(P((lo - b) * (hi - b)), P((lo + b) * (hi + b)));
 }
 
@@ -159,7 +170,7 @@ GD_KERNEL_INLINE P boundary_proximity(double H, const S& b, const S& ea, const S
 // crossings located (located_segment.hpp). Every lane first takes the plain step; lanes that may
 // have met a boundary are redone by the located segment, one by one (a few in a thousand
 // lane-steps).
-template <class P, class S>
+template <class P, class S, bool kExcited = true>
 GD_KERNEL_INLINE void rk4_segment(double H, const S& Ka, const S& Km, const S& Kb, const S& b, const S& alpha,
                                   const P& qa, const P& qm, const P& qb, const P& la, const P& lb, const S& ea,
                                   const S& eb, P& d, P& v) {
@@ -167,16 +178,16 @@ GD_KERNEL_INLINE void rk4_segment(double H, const S& Ka, const S& Km, const S& K
   const double half = 0.5 * H;
   const P lm = 0.5 * (la + lb);
   const S em = S(0.5 * S(ea + eb)), e_dot = S(S(eb - ea) / H);
-  const P a1 = acceleration<P, S>(d, v, la, Ka, qa, b, alpha, ea, e_dot);
+  const P a1 = acceleration<P, S, kExcited>(d, v, la, Ka, qa, b, alpha, ea, e_dot);
   const P v2 = fused_mul_add(half, a1, v);
   const P x2 = fused_mul_add(half, v, d);
-  const P a2 = acceleration<P, S>(x2, v2, lm, Km, qm, b, alpha, em, e_dot);
+  const P a2 = acceleration<P, S, kExcited>(x2, v2, lm, Km, qm, b, alpha, em, e_dot);
   const P v3 = fused_mul_add(half, a2, v);
   const P x3 = fused_mul_add(half, v2, d);
-  const P a3 = acceleration<P, S>(x3, v3, lm, Km, qm, b, alpha, em, e_dot);
+  const P a3 = acceleration<P, S, kExcited>(x3, v3, lm, Km, qm, b, alpha, em, e_dot);
   const P v4 = fused_mul_add(H, a3, v);
   const P x4 = fused_mul_add(H, v3, d);
-  const P a4 = acceleration<P, S>(x4, v4, lb, Kb, qb, b, alpha, eb, e_dot);
+  const P a4 = acceleration<P, S, kExcited>(x4, v4, lb, Kb, qb, b, alpha, eb, e_dot);
   // x + (H/6)(y1 + 2 y2 + 2 y3 + y4), summed left to right; 2 y is exact, so only the last
   // product's fusion changes a rounding.
   const P dv = fused_mul_add(2.0, v3, P(fused_mul_add(2.0, v2, v))) + v4;
@@ -184,7 +195,7 @@ GD_KERNEL_INLINE void rk4_segment(double H, const S& Ka, const S& Km, const S& K
   d = fused_mul_add(H / 6.0, dv, d);
   v = fused_mul_add(H / 6.0, da, v);
 
-  const P near = boundary_proximity<P, S>(H, b, ea, eb, d0, x2, x3, x4, d, v0, v);
+  const P near = boundary_proximity<P, S, kExcited>(H, b, ea, eb, d0, x2, x3, x4, d, v0, v);
   const auto locate = [&](int i) {
     using detail::lane;
     const SegmentInputs in{H,         lane(Ka, i), lane(Km, i), lane(Kb, i), lane(b, i),  lane(alpha, i), lane(qa, i),
@@ -227,8 +238,13 @@ GD_KERNEL_INLINE void rk4_step(const StepPlan& plan, double h, double b, double 
   for (int s = 0; s < plan.segments; ++s) {
     const StepSegment& seg = plan.segment[s];
     const SegmentLoads<P> l = segment_loads<P>(seg, q3, mu, load0, load1);
-    rk4_segment<P, double>((seg.end - seg.begin) * h, seg.stiffness_start, seg.stiffness_mid, seg.stiffness_end, b,
-                           alpha, l.qa, l.qm, l.qb, l.la, l.lb, seg.error_start, seg.error_end, d, v);
+    const double H = (seg.end - seg.begin) * h;
+    if (plan.excited)
+      rk4_segment<P, double, true>(H, seg.stiffness_start, seg.stiffness_mid, seg.stiffness_end, b, alpha, l.qa, l.qm,
+                                   l.qb, l.la, l.lb, seg.error_start, seg.error_end, d, v);
+    else
+      rk4_segment<P, double, false>(H, seg.stiffness_start, seg.stiffness_mid, seg.stiffness_end, b, alpha, l.qa,
+                                    l.qm, l.qb, l.la, l.lb, 0.0, 0.0, d, v);
   }
 }
 

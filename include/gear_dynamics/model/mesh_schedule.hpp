@@ -28,6 +28,7 @@ struct StepSegment {
 
 struct StepPlan {
   int segments = 1;
+  bool excited = false;  // a static transmission error: some segment's error is not 0
   std::array<StepSegment, 3> segment;  // a step holds at most two switches (checked at load)
 };
 
@@ -60,10 +61,10 @@ class MeshSchedule {
 };
 
 inline StepPlan MeshSchedule::plan(std::int64_t n) const {
-  StepPlan p;
   const double a0 = angle(static_cast<double>(n) * h_);
   const double a1 = angle(static_cast<double>(n + 1) * h_);
   if (table_) return plan_from_table(a0, a1);
+  StepPlan p;
 
   // Switch angles strictly inside the step. One that falls within a billionth of a step of a grid
   // point counts as on the grid point, so rounding never creates a sliver sub-step.
