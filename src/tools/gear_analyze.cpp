@@ -678,6 +678,8 @@ int safety(const Options& o) {
 
 void draw(const Options& o) {
   namespace fs = std::filesystem;
+  std::cout.flush();
+  std::fflush(stdout);  // the summary before the plot script's lines
   const fs::path script = fs::path(gd::tools::config_dir()).parent_path() / "scripts" / "plot_dynamics.py";
   if (!fs::exists(script)) throw std::runtime_error("--png: cannot find " + script.string());
   const std::string cmd = "/usr/bin/python3 '" + script.string() + "' " + o.command + " '" + o.output + "'";
