@@ -176,17 +176,18 @@ void validate_mesh(const ModelConfig& c, const GearPair& g, std::vector<std::str
     flush();
   }
   if (cracked) {
-    // The crack may not cut the tooth through: its reach across the tooth stays below the tooth's
-    // thickness at the base circle.
+    // The crack may reach the tooth's centre line, not beyond (the model of Wu et al. and Chaari et
+    // al. keeps the sections whole on the far side): its reach across the tooth stays below half the
+    // tooth's thickness at the base circle.
     const bool wheel = in.crack.gear == FaultyGear::kWheel;
     const double rb = wheel ? g.base_radius2 : g.base_radius1;
     const double x = wheel ? in.profile_shift2 : in.profile_shift1;
     const double z = teeth(in.crack.gear);
-    const double thickness = 2.0 * rb * (kPi / (2.0 * z) + 2.0 * x * std::tan(in.pressure_angle) / z +
-                                         std::tan(in.pressure_angle) - in.pressure_angle);
-    if (!(in.crack.depth * std::sin(in.crack.angle) < thickness)) {
+    const double half = rb * std::sin(kPi / (2.0 * z) + 2.0 * x * std::tan(in.pressure_angle) / z +
+                                      std::tan(in.pressure_angle) - in.pressure_angle);
+    if (!(in.crack.depth * std::sin(in.crack.angle) < half)) {
       e << "gear_pair.crack_depth = " << in.crack.depth << " m is out of range at crack_angle = " << in.crack.angle
-        << " rad; allowed depth sin(angle) < " << thickness << " m (the tooth's thickness at its base circle)";
+        << " rad; allowed depth sin(angle) < " << half << " m (to the tooth's centre line at its base circle)";
       flush();
     }
   }

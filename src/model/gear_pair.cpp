@@ -29,6 +29,25 @@ GearPair derive(const GearInputs& in) {
   g.root_radius2 = r2 - in.dedendum_coefficient * g.module;
   g.base_pitch = kPi * g.module * std::cos(a0);
   g.line_of_centres_length = (r1 + r2) * std::sin(a0);
+  g.operating_pressure_angle = a0;
+  const double x1 = in.profile_shift1, x2 = in.profile_shift2;
+  if (x1 != 0.0 || x2 != 0.0) {  // the unshifted teeth keep the arithmetic above, bit for bit
+    g.tip_radius1 = r1 + (in.addendum_coefficient + x1) * g.module;
+    g.tip_radius2 = r2 + (in.addendum_coefficient + x2) * g.module;
+    g.root_radius1 = r1 - (in.dedendum_coefficient - x1) * g.module;
+    g.root_radius2 = r2 - (in.dedendum_coefficient - x2) * g.module;
+    // The pair meshes without backlash change at the centre distance where
+    // inv(alpha_w) = inv(alpha0) + 2 tan(alpha0) (x1 + x2) / (Z1 + Z2); Newton on inv.
+    const double target = std::tan(a0) - a0 + 2.0 * std::tan(a0) * (x1 + x2) / (z1 + z2);
+    double aw = a0;
+    for (int it = 0; it < 50; ++it) {
+      const double t = std::tan(aw), step = (t - aw - target) / (t * t);
+      aw -= step;
+      if (std::fabs(step) < 1e-16) break;
+    }
+    g.operating_pressure_angle = aw;
+    g.line_of_centres_length = (g.base_radius1 + g.base_radius2) * std::tan(aw);
+  }
 
   const double tip_arm1 = std::sqrt(g.tip_radius1 * g.tip_radius1 - g.base_radius1 * g.base_radius1);
   const double tip_arm2 = std::sqrt(g.tip_radius2 * g.tip_radius2 - g.base_radius2 * g.base_radius2);
@@ -37,7 +56,7 @@ GearPair derive(const GearInputs& in) {
   g.x_a = g.line_of_centres_length - tip_arm2;
   g.x_b = g.x_e - g.base_pitch;
   g.x_d = g.x_a + g.base_pitch;
-  g.x_p = g.base_radius1 * std::tan(a0);
+  g.x_p = g.base_radius1 * std::tan(g.operating_pressure_angle);
 
   g.inertia1 = 0.5 * in.density * kPi * std::pow(r1, 4) * in.face_width;
   g.inertia2 = 0.5 * in.density * kPi * std::pow(r2, 4) * in.face_width;
@@ -54,8 +73,11 @@ GearPair derive(const GearInputs& in) {
   g.mesh_period_angle = 2.0 * kPi / z1;
   g.single_pair_angle = (2.0 - g.contact_ratio) * g.mesh_period_angle;
 
-  // ISO 6336-1:2006 method B, unshifted teeth (x1 = x2 = 0), spur (beta = 0).
-  const double q_prime = 0.04723 + 0.15551 / z1 + 0.25791 / z2;
+  // ISO 6336-1:2006 method B, spur (beta = 0).
+  double q_prime = 0.04723 + 0.15551 / z1 + 0.25791 / z2;
+  if (x1 != 0.0 || x2 != 0.0)  // ISO 6336-1 Table 7's profile-shift terms
+    q_prime += -0.00635 * x1 - 0.11654 * x1 / z1 - 0.00193 * x2 - 0.24188 * x2 / z2 + 0.00529 * x1 * x1 +
+               0.00182 * x2 * x2;
   const double c_th = 1.0 / q_prime;
   const double basic_rack_factor = (1.0 + 0.5 * (1.2 - in.dedendum_coefficient)) *
                                    (1.0 - 0.02 * (20.0 - a0 * 180.0 / kPi));  // C_B

@@ -79,6 +79,7 @@ struct GearPair {
   double root_radius1, root_radius2;        // rf1, rf2 [m]
   double base_pitch;             // pb [m]
   double line_of_centres_length; // lp = C1C2 [m]
+  double operating_pressure_angle;  // alpha_w [rad]: alpha0, unless x1 + x2 != 0
   double contact_ratio;          // epsilon_alpha [-]
   double x_a, x_b, x_p, x_d, x_e;  // contact points from C1 along the line of action [m]
   double inertia1, inertia2;     // J1, J2 [kg m^2]

@@ -5,6 +5,7 @@
 // area out of the contact. SI units; no ROS.
 #pragma once
 
+#include <memory>
 #include <vector>
 
 #include "gear_dynamics/model/gear_pair.hpp"
@@ -45,9 +46,11 @@ class ToothPairStiffness {
   std::vector<double> discontinuities(int pinion_tooth, int wheel_tooth) const;
 
  private:
+  struct Geometry;  // both teeth's profiles, the crack's and the spall's extent
   GearPair gear_;
   PotentialEnergyOptions options_;
   std::vector<double> nodes_, weights_;  // Gauss-Legendre on [-1, 1]
+  std::shared_ptr<const Geometry> geometry_;
 };
 
 }  // namespace gear_dynamics
