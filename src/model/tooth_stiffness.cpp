@@ -90,9 +90,9 @@ void tooth_compliance(const Tooth& t, double tau_c, const std::vector<double>& n
     const double half = 0.5 * (b - a), mid = 0.5 * (a + b);
     for (std::size_t k = 0; k < nodes.size(); ++k) f(mid + half * nodes[k], half * weights[k]);
   };
-  if (t.y_straight > t.rf) {
+  if (t.y_straight > t.rf) {  // below the involute: the crack (from the root) cuts it all
     const double h = t.rb * std::sin(t.theta_b);
-    gauss(t.rf, t.y_straight, [&](double y, double w) { add(y, h, false, w); });
+    gauss(t.rf, t.y_straight, [&](double y, double w) { add(y, h, t.cracked, w); });
   }
   const double split = t.cracked ? std::min(std::max(t.tau_crack, t.tau_start), tau_c) : t.tau_start;
   gauss(t.tau_start, split, [&](double tau, double w) { add(t.y(tau), t.x(tau), true, w * t.dy(tau)); });
@@ -141,9 +141,10 @@ ToothPairStiffness::ToothPairStiffness(const GearPair& gear, PotentialEnergyOpti
   if (in.crack.gear != FaultyGear::kNone && in.crack.depth > 0.0) {
     g->crack_gear = in.crack.gear == FaultyGear::kPinion ? 0 : 1;
     Tooth& t = g->tooth[g->crack_gear];
-    // The crack starts where the involute leaves the base circle (or the root circle), on the
-    // loaded side, and runs inwards at upsilon to the centre line (Wu, Zuo & Parey 2008; Chaari et
-    // al. 2009): the material beyond its tip, h_q from the centre line, carries the load.
+    // The crack starts at the root of the loaded side and runs inwards at upsilon to the centre
+    // line (Wu, Zuo & Parey 2008; Chaari et al. 2009): the sections from the root up to where the
+    // tooth's half-thickness falls to the crack tip's distance h_q from the centre line carry the
+    // load on h_q + h only.
     t.cracked = true;
     t.h_q = t.x(t.tau_start) - in.crack.depth * std::sin(in.crack.angle);
     // The involute's half-thickness falls with tau: the sections up to where it reaches h_q are cut.
