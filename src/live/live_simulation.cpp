@@ -168,7 +168,7 @@ void LiveSimulation::loop() {
     if (!next.running || next.until || std::chrono::steady_clock::now() - start >= kMinWait) sink_.flush();
     std::unique_lock<std::mutex> lock(mutex_);
     if (next.running) {
-      if (next.until) wake_.wait_until(lock, *next.until, [&] { return has_pending_ || stop_; });
+      if (next.until) wait_for_clock(lock, *next.until);
       local_.running_wall += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       status_.running_wall = local_.running_wall;
     } else {
@@ -181,6 +181,22 @@ void LiveSimulation::loop() {
   sink_.flush();
 }
 
+void LiveSimulation::wait_for_clock(std::unique_lock<std::mutex>& lock, LiveClock::time_point until) {
+  const auto woken = [&] { return has_pending_ || stop_.load(); };
+  if (clock_.steady()) {
+    wake_.wait_until(lock, until, woken);
+    return;
+  }
+  // Another node's time: it may stand still (paused) or go back (reset), so it is read again
+  // every slice; going back ends the wait and pace() starts again from the present.
+  for (auto before = clock_.now(); !woken();) {
+    const auto now = clock_.now();
+    if (now >= until || now < before) return;
+    before = now;
+    wake_.wait_for(lock, kFollowSlice, woken);
+  }
+}
+
 LiveSimulation::Next LiveSimulation::iterate() {
   Request r;
   std::uint64_t batch;
@@ -191,6 +207,7 @@ LiveSimulation::Next LiveSimulation::iterate() {
     batch = requested_;
   }
   Outcome outcome = apply(r);
+  notice_clock_going_back();
   const bool stepping = r.step && outcome.ok;
   if (running() || stepping) advance();
   if (stepping)
@@ -391,6 +408,12 @@ LiveSample LiveSimulation::sample() const {
   const Realization& e = realization_;
   LiveSample s;
   s.step = e.step_index();
+  const auto due = anchored_ && real_time_factor_ > 0.0
+                       ? anchor_wall_ + std::chrono::round<LiveClock::time_point::duration>(std::chrono::duration<double>(
+                                            static_cast<double>(s.step - anchor_step_) * config_.run.time_step /
+                                            real_time_factor_))
+                       : clock_.now();
+  s.clock_time = std::chrono::duration<double>(due.time_since_epoch()).count();
   s.t = grid_time(s.step, e.time_step());
   s.delta = e.delta();
   s.delta_dot = e.velocity();
@@ -483,9 +506,20 @@ void LiveSimulation::diverge(const std::string& what) {
   divergence_ = what;
 }
 
+void LiveSimulation::notice_clock_going_back() {
+  if (!anchored_ || real_time_factor_ <= 0.0) return;
+  const auto now = clock_.now();
+  if (!(now < last_now_)) return;
+  log(LiveLogLevel::Warn, format("the pacing clock went back by %.6g s (its owner was reset or its time jumped): "
+                                 "pacing starts again from the clock's present, at t = %.9g s of this run",
+                                 std::chrono::duration<double>(last_now_ - now).count(), realization_.time()));
+  anchored_ = false;  // the states from here on are due in the clock's new time line
+}
+
 std::optional<LiveClock::time_point> LiveSimulation::pace() {
   if (real_time_factor_ <= 0.0) return std::nullopt;
   const auto now = clock_.now();
+  last_now_ = now;
   // Rounded to the clock's tick, not truncated: 1000 steps of 1 us at factor 1 are 1 ms exactly,
   // whichever way the double product rounds.
   const auto target = anchor_wall_ + std::chrono::round<LiveClock::time_point::duration>(

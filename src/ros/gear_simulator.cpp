@@ -64,9 +64,9 @@ std::vector<std::pair<std::string, double SimulatorConfig::*>> double_parameters
 // The two gears as joints (doc/gear_simulator.md §3.3): the pinion turns at the constant nominal
 // speed, theta1 = phi0 + Omega t (doc/model.md D3), and delta = Rb1 theta1 - Rb2 theta2 gives the
 // wheel's angle; positive theta2 turns the wheel the way the pinion drives it.
-sensor_msgs::JointState make_joint_state(const LiveSample& s, const GearPair& g) {
+sensor_msgs::JointState make_joint_state(const LiveSample& s, const GearPair& g, const ros::Time& stamp) {
   sensor_msgs::JointState m;
-  m.header.stamp = sim_stamp(s.t);
+  m.header.stamp = stamp;
   m.name = {"pinion_joint", "wheel_joint"};
   const double theta1 = g.in.mesh_phase + g.in.pinion_speed * s.t;
   m.position = {theta1, (g.base_radius1 * theta1 - s.delta) / g.base_radius2};
@@ -125,8 +125,16 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
   held_.reserve(5 * kBurst + 5);
   batch_.states.reserve(kBurst + 2);
   held_joints_.reserve(kBurst + 2);
+  following_ = !settings_.publish_clock && ros::Time::isSimTime();
+  if (following_)
+    ROS_INFO("gear_simulator: publish_clock false under /use_sim_time: this node follows the clock owner's /clock "
+             "(paced against it at real_time_factor > 0, its messages stamped in the owner's time; it waits while "
+             "the owner is paused, and starts again from the owner's present when /clock goes back)");
   // Publishes t = 0 and the run info at once.
-  sim_.emplace(config_, settings_, static_cast<LiveSink&>(*this));
+  if (following_)
+    sim_.emplace(config_, settings_, static_cast<LiveSink&>(*this), ros_clock_);
+  else
+    sim_.emplace(config_, settings_, static_cast<LiveSink&>(*this));
 
   pause_srv_ = private_nh_.advertiseService("pause", &GearSimulator::pause, this);
   unpause_srv_ = private_nh_.advertiseService("unpause", &GearSimulator::unpause, this);
@@ -149,6 +157,10 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
   diagnostics_timer_ = nh_.createWallTimer(ros::WallDuration(1.0), [this](const ros::WallTimerEvent&) {
     updater_.force_update();
     if (settings_.publish_clock) check_clock_publishers();
+    if (following_ && !ros::Time::isValid() && sim_ && sim_->real_time_factor() > 0.0)
+      ROS_WARN_THROTTLE(10.0, "gear_simulator: no /clock yet: this node (publish_clock false) waits for the clock "
+                              "owner's time; start a gear_simulator with publish_clock:=true, or run this one with "
+                              "publish_clock:=true (or real_time_factor:=0)");
   });
 
   const std::string load = settings_.deterministic
@@ -249,7 +261,7 @@ void GearSimulator::record(const std::string& topic, const ros::Time& stamp, con
 void GearSimulator::load_command(const std_msgs::Float64ConstPtr& m) {
   const LiveSimulation::Status s = sim_->status();
   const ros::Time now = ros::Time::now();
-  record(load_sub_.getTopic(), sim_stamp(s.time), *m);  // received after the state at s.time
+  record(load_sub_.getTopic(), stamp_now(s.time), *m);  // received after the state at s.time
   ++commands_received_;
   last_command_ = std::chrono::steady_clock::now();
   silence_warned_ = false;
@@ -427,12 +439,13 @@ void GearSimulator::hold(const LiveSample& s, bool record_it) {
   const bool recording = record_it && !record_prefix_.empty();
   if (recording || state_.wanted() || state_batch_.wanted()) {
     held_.push_back(Held{&state_, make_state(s), {}, state_.wanted()});
+    held_.back().state.header.stamp = stamp_of(s);
     const GearState& m = held_.back().state;
     if (recording) record(state_.topic, m.header.stamp, m);
   }
-  if (joint_states_.wanted()) held_joints_.push_back(make_joint_state(s, gear_));
+  const ros::Time stamp = stamp_of(s);
+  if (joint_states_.wanted()) held_joints_.push_back(make_joint_state(s, gear_, stamp));
   if (settings_.publish_scalars) {
-    const ros::Time stamp = sim_stamp(s.t);
     const auto scalar = [&](const CountedPublisher& p, double value) {
       if (!recording && !p.wanted()) return;
       held_.push_back(Held{&p, {}, {}});
@@ -494,7 +507,8 @@ void GearSimulator::spectrum(const SpectrumSamples& window) {
 
 void GearSimulator::finished(const LiveSample& last) {
   flush();  // the run's states before its final state
-  const GearState m = make_state(last);
+  GearState m = make_state(last);
+  m.header.stamp = stamp_of(last);
   final_state_pub_.publish(m);
   record(final_state_pub_.getTopic(), m.header.stamp, m);
   record_close();  // the bag of this run is complete; a ~reset opens the next one
@@ -503,6 +517,21 @@ void GearSimulator::finished(const LiveSample& last) {
 void GearSimulator::idle(const LiveSample& last) {
   flush();
   publish_clock(std::chrono::steady_clock::now(), last.t, true);  // where time stands, every idle period
+}
+
+LiveClock::time_point GearSimulator::RosClock::now() const {
+  return time_point(std::chrono::nanoseconds(ros::Time::now().toNSec()));
+}
+
+ros::Time GearSimulator::stamp_of(const LiveSample& s) const {
+  const bool owner_time = following_ && sim_ && sim_->real_time_factor() > 0.0 && ros::Time::isValid();
+  return owner_time && s.clock_time > 0.0 ? ros::Time(s.clock_time) : sim_stamp(s.t);
+}
+
+ros::Time GearSimulator::stamp_now(double t) const {
+  // Any thread: the factor in effect from the status, not the stepping loop's own member.
+  const bool owner_time = following_ && sim_ && sim_->status().real_time_factor > 0.0 && ros::Time::isValid();
+  return owner_time ? ros::Time::now() : sim_stamp(t);
 }
 
 void GearSimulator::publish_clock(std::chrono::steady_clock::time_point now, double t, bool always) {
@@ -523,7 +552,7 @@ void GearSimulator::run_info(const LiveRunInfo& i) {
   RunInfo info = make_run_info(i.config, deterministic ? RunKind::S1 : RunKind::Stochastic,
                                static_cast<std::uint32_t>(i.lane.realization), i.lane.mu, i.lane.sigma,
                                i.settings.t_end, out.c_str());
-  info.header.stamp = sim_stamp(i.t);  // these values hold from here on
+  info.header.stamp = stamp_now(i.t);  // these values hold from here on
   run_info_pub_.publish(info);
   try {
     record_open();  // after t_end and a ~reset: the next bag

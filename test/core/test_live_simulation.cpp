@@ -280,6 +280,47 @@ TEST(LiveSimulation, DivergenceStopsWithAMessage) {
   EXPECT_EQ(sink.samples.size(), 2u);  // t = 0 again
 }
 
+// Following another node's clock: each state carries the clock time it is due at (what a follower
+// stamps), a clock that stands still keeps the target where it is, and a clock that goes back (its
+// owner was reset) makes pacing start again from the clock's present, with a warning.
+TEST(LiveSimulation, FollowsAClockThatStopsAndGoesBack) {
+  using std::chrono::microseconds;
+  struct Followed : FakeClock {
+    bool steady() const override { return false; }
+  };
+  const Loaded l = load("simulator: {real_time_factor: 1.0, t_end: 0, publish_clock: false}");
+  RecordingSink sink;
+  Followed clock;
+  clock.t += std::chrono::seconds(7);
+  gd::LiveSimulation sim(l.model, l.sim, sink, clock);
+  const auto seconds_of = [](gd::LiveClock::time_point t) {
+    return std::chrono::duration<double>(t.time_since_epoch()).count();
+  };
+  EXPECT_DOUBLE_EQ(sink.samples.at(0).clock_time, seconds_of(clock.t));  // t = 0: not anchored yet
+  sim.iterate();  // anchors at 7 s
+  const auto t0 = clock.t;
+  gd::LiveSimulation::Next n = sim.iterate();
+  ASSERT_TRUE(n.until);
+  EXPECT_EQ(*n.until - t0, microseconds(1000));
+  // The second state (1 ms) was published before the loop waited: it is due at 7.001 s.
+  EXPECT_DOUBLE_EQ(sink.samples.back().clock_time, seconds_of(t0 + microseconds(1000)));
+  // The owner paused: its clock stands still and the target stays.
+  n = sim.iterate();
+  ASSERT_TRUE(n.until);
+  EXPECT_EQ(*n.until - t0, microseconds(2000));
+  EXPECT_FALSE(sink.logged(gd::LiveLogLevel::Warn, "went back"));
+  // The owner was reset: its clock went back 5 s. No wait for 5 s of the old time line.
+  clock.t -= std::chrono::seconds(5);
+  n = sim.iterate();
+  EXPECT_FALSE(n.until);
+  EXPECT_TRUE(sink.logged(gd::LiveLogLevel::Warn, "the pacing clock went back by 5 s"));
+  const auto t1 = clock.t;
+  n = sim.iterate();
+  ASSERT_TRUE(n.until);
+  EXPECT_EQ(*n.until - t1, microseconds(1000));
+  EXPECT_DOUBLE_EQ(sink.samples.back().clock_time, seconds_of(t1 + microseconds(1000)));
+}
+
 TEST(LiveSimulation, PacesByTheInjectedClock) {
   using std::chrono::microseconds;
   const Loaded l = load("simulator: {real_time_factor: 1.0, t_end: 0}");

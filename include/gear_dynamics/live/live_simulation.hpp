@@ -47,6 +47,10 @@ struct LiveSample {
   double mesh_stiffness = 0.0, mesh_phase = 0.0;
   double mu = 0.0, sigma = 0.0, drift = 0.0;
   std::uint64_t realization = 0, seed = 0;
+  // The pacing clock's time this state stands for [s since the clock's epoch]: where pacing is
+  // anchored, the time at which it is due; otherwise the clock's time when it was taken. A node
+  // that follows another's clock stamps its messages with it.
+  double clock_time = 0.0;
 };
 
 // What the run's parameters are from `step` on (for RunInfo).
@@ -119,12 +123,14 @@ class LiveSink {
   virtual void spectrum(const SpectrumSamples& /*window*/) {}
 };
 
-// Wall time for pacing; tests inject a fake one.
+// Wall time for pacing; tests inject a fake one. A clock that is not steady (another node's
+// simulated time, which stops, resumes and may go back) is waited for in short slices of wall time.
 class LiveClock {
  public:
   using time_point = std::chrono::steady_clock::time_point;
   virtual ~LiveClock() = default;
   virtual time_point now() const = 0;
+  virtual bool steady() const { return true; }
 };
 class SteadyLiveClock : public LiveClock {
  public:
@@ -171,6 +177,8 @@ class LiveSimulation {
   static constexpr std::chrono::milliseconds kMinWait{1};
   // While not running, the loop wakes this often (LiveSink::idle).
   static constexpr std::chrono::milliseconds kIdlePeriod{100};
+  // A clock that is not steady is looked at again after at most this much wall time.
+  static constexpr std::chrono::milliseconds kFollowSlice{2};
 
   // Validated configuration (parse_config, parse_simulator_settings; settings.load_input names the
   // LoadInput). Publishes t = 0 and the run
@@ -227,6 +235,7 @@ class LiveSimulation {
   void restart();
   void diverge(const std::string& what);
   std::optional<LiveClock::time_point> pace();
+  void notice_clock_going_back();
   void take_load_command();
   bool running() const { return !paused_ && !finished_ && !diverged_; }
   std::string state_name() const;
@@ -235,6 +244,7 @@ class LiveSimulation {
   LiveSample sample() const;
   void log(LiveLogLevel level, const std::string& line) { sink_.log(level, line); }
   void loop();
+  void wait_for_clock(std::unique_lock<std::mutex>& lock, LiveClock::time_point until);
 
   // Fixed after construction.
   const ModelConfig config_;
@@ -256,7 +266,7 @@ class LiveSimulation {
   bool paused_, finished_ = false, diverged_ = false;
   std::string divergence_;
   bool anchored_ = false;  // pacing restarts from (anchor_wall_, anchor_step_) when false
-  LiveClock::time_point anchor_wall_;
+  LiveClock::time_point anchor_wall_, last_now_;
   std::int64_t anchor_step_ = 0;
   std::optional<double> load_applied_;  // the command in effect (external modes)
   Status local_;

@@ -95,6 +95,11 @@ class GearSimulator : private LiveSink {
   void spectrum(const SpectrumSamples& window) override;  // hands the window to spectrum_
   // /clock = t + 1 s at wall time `now`, if `always` or kClockInterval after the last one.
   void publish_clock(std::chrono::steady_clock::time_point now, double t, bool always);
+  // The stamp of a state: t + 1 s on this node's own time line, or, while it follows the clock
+  // owner's /clock (paced, with /clock received), the owner's time the state is due at.
+  ros::Time stamp_of(const LiveSample& s) const;
+  // The stamp of what happens now (a load command, a run-info change) at this node's time t.
+  ros::Time stamp_now(double t) const;
 
   // The bag of record:=true (~record_prefix not empty): opened at the start and after a reset that
   // follows t_end, closed at t_end and at shutdown. Under record_mutex_.
@@ -117,6 +122,14 @@ class GearSimulator : private LiveSink {
   // With publish_clock: warns once per other node that publishes /clock (the master's state).
   void check_clock_publishers();
 
+  // ROS time (under /use_sim_time the clock owner's /clock) as the pacing clock of a node that does
+  // not own the clock.
+  class RosClock : public LiveClock {
+   public:
+    time_point now() const override;
+    bool steady() const override { return false; }
+  };
+
   // Fixed after construction.
   ros::NodeHandle nh_, private_nh_;
   ModelConfig config_;
@@ -124,6 +137,9 @@ class GearSimulator : private LiveSink {
   SimulatorSettings settings_;
 
   std::string record_prefix_;  // empty: no recording
+  // publish_clock false under /use_sim_time: paced by the owner's /clock, stamped in its time.
+  bool following_ = false;
+  RosClock ros_clock_;
 
   // Stepping thread only.
   std::chrono::steady_clock::time_point last_clock_;
