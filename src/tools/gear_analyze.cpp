@@ -24,6 +24,7 @@
 #include "gear_dynamics/dynamics/safety.hpp"
 #include "gear_dynamics/dynamics/spectrum.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
+#include "gear_dynamics/ros/live_bag.hpp"
 #include "cli.hpp"
 
 namespace gd = gear_dynamics;
@@ -35,6 +36,7 @@ struct Options {
   gd::tools::ModelOptions model;
   std::string output = "gear_analyze";
   bool png = false;
+  std::string bag;  // --bag: a live node's run instead of a simulation
   std::map<std::string, std::string> kv;  // the subcommand's valued options as given (--name value)
   bool log = false;
   double get(const std::string& k, double def) const {
@@ -65,6 +67,10 @@ Options parse(int argc, char** argv) {
   gd::tools::add_model_options(app, o.model);
   app.add_option("--output", o.output, "CSV files PREFIX_<name>.csv")->type_name("PREFIX")->capture_default_str();
   app.add_flag("--png", o.png, "then draw PREFIX_*.png with scripts/plot_dynamics.py");
+  app.add_option("--bag", o.bag,
+                 "spectrum, poincare, safety: analyse the run recorded in this bag of gear_simulator (record:=true, "
+                 "or rosbag record of its state or state_batch topic) instead of simulating")
+      ->type_name("FILE");
 
   CLI::App* spectrum = app.add_subcommand(
       "spectrum", "Welch PSD of delta and of the mesh force of S1 (and of realizations 0..R-1: mean PSD with a "
@@ -224,50 +230,21 @@ int stiffness(const Options& o) {
   return 0;
 }
 
-// ---------------------------------------------------------------------------------------------
-int spectrum(const Options& o) {
-  const gd::ModelConfig c = load_config(o, o.get("duration", 0));
-  const gd::GearPair g = gd::derive(c.gear);
-  const int R = static_cast<int>(o.get("realizations", 0));
-  const double transient = o.get("transient", 0.1);
-  const double h = c.run.time_step;
-  // 100 kHz by default whatever the step: the mesh force jumps at the switches, so its spectrum
-  // folds back from above Nyquist, and a coarser grid would fold more.
-  const int k = static_cast<int>(o.get("decimate", std::max(1.0, std::round(1e-5 / h))));
-  const double fs = 1.0 / (k * h), fm = 1.0 / gd::mesh_period(g);
-  // Default segment: 30 mesh periods, so that every mesh harmonic falls on a bin centre. With a
-  // gear whose teeth differ, whole schedule periods (revolutions), up to 4 while the run holds two
-  // segments: its sidebands then fall on bin centres too, 4 bins from the harmonics, clear of the
-  // Hann window's leakage of a harmonic into its neighbouring bins.
-  const gd::MeshSchedule schedule(g, h);
-  const int periods = schedule.table() ? schedule.table()->mesh_periods() : 1;
-  const double available = (c.run.duration - transient) / gd::mesh_period(g);
-  const int revolutions = std::max(1, std::min(4, static_cast<int>(available / (2.0 * periods))));
-  const double seg_default =
-      std::round((periods > 1 ? revolutions * periods : 30.0) * gd::mesh_period(g) * fs);
-  gd::WelchOptions w{static_cast<std::size_t>(o.get("segment", seg_default)), o.get("overlap", 0.5)};
-  std::vector<gd::LaneSpec> lanes{gd::deterministic_lane(c, c.friction_coefficient)};
-  for (int r = 0; r < R; ++r) lanes.push_back(gd::stochastic_lane(c, c.friction_coefficient, r));
-  const int L = static_cast<int>(lanes.size());
-  std::vector<std::vector<double>> delta(L), force(L);
-  const auto t0 = std::chrono::steady_clock::now();
-  // Blocks of 16 lanes in parallel; S1 is lane 0 of block 0.
-  const int per = 16, blocks = (L + per - 1) / per;
-  tbb::parallel_for(0, blocks, [&](int blk) {
-    const int first = blk * per, last = std::min(L, first + per);
-    gd::Ensemble e(g, h, c.initial, std::vector<gd::LaneSpec>(lanes.begin() + first, lanes.begin() + last), c.seed);
-    const std::int64_t N = c.run.steps(), n0 = std::llround(transient / h);
-    for (std::int64_t n = 0; n <= N; ++n) {
-      if (n >= n0 && (n - n0) % k == 0) {
-        const double K = e.mesh().stiffness(e.time()), err = e.mesh().transmission_error(e.time());
-        for (int l = 0; l < last - first; ++l) {
-          delta[first + l].push_back(e.delta()[l]);
-          force[first + l].push_back(gd::mesh_force(g, K, e.delta()[l] - err, e.velocity()[l]));
-        }
-      }
-      if (n < N) e.step();
-    }
-  });
+// The PSDs of delta and of the mesh force of run 0 (S1, or a bag's run) and of runs 1..R
+// (realizations), with the marks and the sidebands, written as PREFIX_psd.csv, _peaks.csv,
+// _spectrum_info.csv (and _sidebands.csv where the teeth differ).
+struct SpectrumInput {
+  std::vector<std::vector<double>> delta, force;
+  double fs = 0, fm = 0, transient = 0, duration = 0, mu = 0, wall = 0;
+  int k = 1, periods = 1;
+  gd::WelchOptions w;
+};
+void write_spectra(const Options& o, const SpectrumInput& in) {
+  const int L = static_cast<int>(in.delta.size()), R = L - 1, k = in.k, periods = in.periods;
+  const double fs = in.fs, fm = in.fm, transient = in.transient;
+  const gd::WelchOptions& w = in.w;
+  const auto& delta = in.delta;
+  const auto& force = in.force;
   std::vector<gd::Psd> pd, pf;
   for (int l = 0; l < L; ++l) {
     pd.push_back(gd::welch_psd(delta[l], fs, w));
@@ -276,8 +253,8 @@ int spectrum(const Options& o) {
   const gd::Psd& s1 = pd[0];
   std::printf("# spectrum: mu %g, T %g s, transient %g s, fs %g Hz (every %d steps), Hann window, segment %zu "
               "(resolution %.4g Hz, ENBW %.4g Hz), overlap %g, %zu segments, %d realizations, %.1f s wall\n",
-              c.friction_coefficient, c.run.duration, transient, fs, k, s1.segment, s1.resolution, s1.enbw, w.overlap,
-              s1.segments, R, since(t0));
+              in.mu, in.duration, transient, fs, k, s1.segment, s1.resolution, s1.enbw, w.overlap,
+              s1.segments, R, in.wall);
   std::printf("# mesh frequency f_m = %.6g Hz\n", fm);
   {
     std::ofstream f = open_csv(o, "psd");
@@ -322,8 +299,60 @@ int spectrum(const Options& o) {
     std::ofstream meta = open_csv(o, "spectrum_info");
     meta << "mesh_frequency,sample_rate,resolution,enbw,segment,overlap,segments,realizations,transient,duration\n"
          << fm << "," << fs << "," << s1.resolution << "," << s1.enbw << "," << s1.segment << "," << w.overlap << ","
-         << s1.segments << "," << R << "," << transient << "," << c.run.duration << "\n";
+         << s1.segments << "," << R << "," << transient << "," << in.duration << "\n";
   }
+}
+
+// ---------------------------------------------------------------------------------------------
+int spectrum(const Options& o) {
+  const gd::ModelConfig c = load_config(o, o.get("duration", 0));
+  const gd::GearPair g = gd::derive(c.gear);
+  const int R = static_cast<int>(o.get("realizations", 0));
+  const double transient = o.get("transient", 0.1);
+  const double h = c.run.time_step;
+  // 100 kHz by default whatever the step: the mesh force jumps at the switches, so its spectrum
+  // folds back from above Nyquist, and a coarser grid would fold more.
+  const int k = static_cast<int>(o.get("decimate", std::max(1.0, std::round(1e-5 / h))));
+  const double fs = 1.0 / (k * h), fm = 1.0 / gd::mesh_period(g);
+  // Default segment: 30 mesh periods, so that every mesh harmonic falls on a bin centre. With a
+  // gear whose teeth differ, whole schedule periods (revolutions), up to 4 while the run holds two
+  // segments: its sidebands then fall on bin centres too, 4 bins from the harmonics, clear of the
+  // Hann window's leakage of a harmonic into its neighbouring bins.
+  const gd::MeshSchedule schedule(g, h);
+  const int periods = schedule.table() ? schedule.table()->mesh_periods() : 1;
+  const double available = (c.run.duration - transient) / gd::mesh_period(g);
+  const int revolutions = std::max(1, std::min(4, static_cast<int>(available / (2.0 * periods))));
+  const double seg_default =
+      std::round((periods > 1 ? revolutions * periods : 30.0) * gd::mesh_period(g) * fs);
+  gd::WelchOptions w{static_cast<std::size_t>(o.get("segment", seg_default)), o.get("overlap", 0.5)};
+  std::vector<gd::LaneSpec> lanes{gd::deterministic_lane(c, c.friction_coefficient)};
+  for (int r = 0; r < R; ++r) lanes.push_back(gd::stochastic_lane(c, c.friction_coefficient, r));
+  const int L = static_cast<int>(lanes.size());
+  std::vector<std::vector<double>> delta(L), force(L);
+  const auto t0 = std::chrono::steady_clock::now();
+  // Blocks of 16 lanes in parallel; S1 is lane 0 of block 0.
+  const int per = 16, blocks = (L + per - 1) / per;
+  tbb::parallel_for(0, blocks, [&](int blk) {
+    const int first = blk * per, last = std::min(L, first + per);
+    gd::Ensemble e(g, h, c.initial, std::vector<gd::LaneSpec>(lanes.begin() + first, lanes.begin() + last), c.seed);
+    const std::int64_t N = c.run.steps(), n0 = std::llround(transient / h);
+    for (std::int64_t n = 0; n <= N; ++n) {
+      if (n >= n0 && (n - n0) % k == 0) {
+        const double K = e.mesh().stiffness(e.time()), err = e.mesh().transmission_error(e.time());
+        for (int l = 0; l < last - first; ++l) {
+          delta[first + l].push_back(e.delta()[l]);
+          force[first + l].push_back(gd::mesh_force(g, K, e.delta()[l] - err, e.velocity()[l]));
+        }
+      }
+      if (n < N) e.step();
+    }
+  });
+  SpectrumInput in;
+  in.delta = std::move(delta);
+  in.force = std::move(force);
+  in.fs = fs, in.fm = fm, in.transient = transient, in.duration = c.run.duration, in.mu = c.friction_coefficient;
+  in.wall = since(t0), in.k = k, in.periods = periods, in.w = w;
+  write_spectra(o, in);
   return 0;
 }
 
@@ -676,6 +705,139 @@ int safety(const Options& o) {
   return 0;
 }
 
+// ---------------------------------------------------------------------------------------------
+// A live node's run read from its bag (--bag): its configuration from the bag's run_info.
+struct BagRun {
+  gd::ModelConfig config;
+  gd::LiveBagRun run;
+  double period = 0;  // the recording period [s]
+};
+
+BagRun load_bag(const Options& o) {
+  BagRun b;
+  b.run = gd::read_live_bag(o.bag);
+  if (b.run.parameters_yaml.empty()) {
+    b.config = load_config(o, 0);
+    std::printf("# %s has no run_info: the model is config/ with --config and --set, which must be the node's\n",
+                o.bag.c_str());
+  } else {
+    b.config = gd::parse_config(YAML::Load(b.run.parameters_yaml));
+    if (!o.model.files.empty() || !o.model.sets.empty() || o.model.mu)
+      std::printf("# --config, --set and --mu are left out: the bag's run_info holds the run's configuration\n");
+  }
+  b.period = b.run.t[1] - b.run.t[0];
+  std::printf("# bag %s: %zu states from %s, t = %g ... %g s, every %g s (%g Hz)\n", o.bag.c_str(), b.run.t.size(),
+              b.run.topic.c_str(), b.run.t.front(), b.run.t.back(), b.period, 1.0 / b.period);
+  if (!b.run.note.empty()) std::printf("# %s\n", b.run.note.c_str());
+  return b;
+}
+
+// The first recorded state at or after `transient`.
+std::size_t first_after(const BagRun& b, double transient) {
+  return static_cast<std::size_t>(std::lower_bound(b.run.t.begin(), b.run.t.end(), transient - 1e-9 * b.period) -
+                                  b.run.t.begin());
+}
+
+int spectrum_of_bag(const Options& o) {
+  const BagRun b = load_bag(o);
+  const gd::ModelConfig& c = b.config;
+  const gd::GearPair g = gd::derive(c.gear);
+  const gd::MeshSchedule schedule(g, c.run.time_step);
+  const double transient = o.get("transient", 0.1), fm = 1.0 / gd::mesh_period(g);
+  SpectrumInput in;
+  in.delta.assign(1, {});
+  in.force.assign(1, {});
+  for (std::size_t i = first_after(b, transient); i < b.run.t.size(); ++i) {
+    const double e = schedule.transmission_error(b.run.t[i]);
+    in.delta[0].push_back(b.run.delta[i]);
+    in.force[0].push_back(gd::mesh_force(g, b.run.stiffness[i], b.run.delta[i] - e, b.run.delta_dot[i]));
+  }
+  in.fs = 1.0 / b.period, in.fm = fm, in.transient = transient, in.duration = b.run.t.back();
+  in.mu = c.friction_coefficient, in.k = static_cast<int>(std::lround(b.period / c.run.time_step));
+  in.periods = schedule.table() ? schedule.table()->mesh_periods() : 1;
+  const double available = (b.run.t.back() - transient) / gd::mesh_period(g);
+  const int revolutions = std::max(1, std::min(4, static_cast<int>(available / (2.0 * in.periods))));
+  const double seg_default =
+      std::round((in.periods > 1 ? revolutions * in.periods : 30.0) * gd::mesh_period(g) * in.fs);
+  in.w = gd::WelchOptions{static_cast<std::size_t>(o.get("segment", seg_default)), o.get("overlap", 0.5)};
+  if (in.delta[0].size() < in.w.segment)
+    throw std::runtime_error("the bag's run holds " + std::to_string(in.delta[0].size()) + " states after --transient " +
+                             std::to_string(transient) + " s, fewer than one Welch segment of " +
+                             std::to_string(in.w.segment) + ": record longer, or give --segment");
+  if (in.fs < 2.5 * fm)
+    std::printf("# the recording's Nyquist frequency %g Hz is below the mesh frequency's harmonics: record at a higher "
+                "publish_rate for a spectrum\n", 0.5 * in.fs);
+  write_spectra(o, in);
+  return 0;
+}
+
+int poincare_of_bag(const Options& o) {
+  const BagRun b = load_bag(o);
+  const gd::GearPair g = gd::derive(b.config.gear);
+  const double transient = o.get("transient", 0.2), Tm = gd::mesh_period(g), dt = b.period;
+  const auto& r = b.run;
+  std::ofstream f = open_csv(o, "poincare");
+  f << "set,run,phase0,k,t,delta,delta_dot,on_grid\n";
+  // Mesh phase 0 at t = first_mesh_period_start + k T_m: a recorded state where that is a recording
+  // time, else the cubic Hermite through the two recorded states around it.
+  std::vector<gd::SectionState> points;
+  const double offset = gd::first_mesh_period_start(g);
+  for (std::int64_t k = 0;; ++k) {
+    const double t = offset + static_cast<double>(k) * Tm;
+    if (t > r.t.back() + 1e-9 * dt) break;
+    if (t < transient - 1e-9 * dt) continue;
+    const double u = (t - r.t.front()) / dt;
+    const auto i = static_cast<std::size_t>(std::max(0.0, std::floor(u + 1e-9)));
+    const double s = t - r.t[i];
+    gd::SectionState p;
+    p.k = k, p.time = t;
+    p.on_grid = std::abs(s) <= 1e-9 * dt || i + 1 >= r.t.size();
+    p.x = p.on_grid ? std::vector<double>{r.delta[i], r.delta_dot[i]}
+                    : std::vector<double>{gd::hermite_in_step(r.delta[i], r.delta_dot[i], r.delta[i + 1],
+                                                               r.delta_dot[i + 1], s, dt),
+                                          gd::hermite_slope_in_step(r.delta[i], r.delta_dot[i], r.delta[i + 1],
+                                                                    r.delta_dot[i + 1], s, dt)};
+    f << "bag,0," << g.in.mesh_phase << "," << p.k << "," << p.time << "," << p.x[0] << "," << p.x[1] << ","
+      << p.on_grid << "\n";
+    points.push_back(p);
+  }
+  const int period = gd::detect_period(points, 16, {1e-3 * g.in.backlash, 1e-3 * std::sqrt(2 * b.config.load.initial_mean * g.in.backlash)});
+  std::printf("# poincare of the bag: mesh period %.6g s (%s), transient %g s; %zu points, %s\n", Tm,
+              gd::on_step_grid(Tm, dt) ? "a whole number of recording periods: recorded states"
+                                       : "interpolated between recorded states",
+              transient, points.size(), period > 0 ? ("period " + std::to_string(period)).c_str() : "no period <= 16");
+  return 0;
+}
+
+int safety_of_bag(const Options& o) {
+  const BagRun b = load_bag(o);
+  const double settle = o.get("settle", 0.3);
+  const gd::Interval di = interval_mm(o.str("delta-interval", "0.040,0.055"), 1e-3);
+  const gd::Interval vi = interval_mm(o.str("velocity-interval", "-16,16"), 1e-3);
+  gd::RecordedRuns runs;
+  runs.time = b.run.t;
+  runs.delta = {b.run.delta};
+  runs.velocity = {b.run.delta_dot};
+  const auto s = gd::safety_over_time(runs, di, vi);
+  std::ofstream f = open_csv(o, "safety");
+  f << "t,joint,delta,velocity\n";
+  std::size_t after = 0, inside = 0;
+  for (std::size_t j = 0; j < s.time.size(); ++j) {
+    f << s.time[j] << "," << s.joint[j].estimate << "," << s.delta_only[j].estimate << ","
+      << s.velocity_only[j].estimate << "\n";
+    if (s.time[j] >= settle) ++after, inside += s.joint[j].estimate > 0.5;
+  }
+  const auto fp = gd::first_passage(runs, di, vi, settle);
+  std::ofstream fpf = open_csv(o, "first_passage");
+  fpf << "run,time,event\n" << 0 << "," << fp.time[0] << "," << fp.event[0] << "\n";
+  std::printf("# safety of the bag's run: delta in [%g, %g] m, delta_dot in [%g, %g] m/s; after %g s %zu of %zu "
+              "recorded states inside (%.1f %%); %s\n",
+              di.lo, di.hi, vi.lo, vi.hi, settle, inside, after, after ? 100.0 * inside / after : 0.0,
+              fp.event[0] ? ("first left the safe set at t = " + std::to_string(fp.time[0]) + " s").c_str()
+                          : "never left it (censored at the last state)");
+  return 0;
+}
+
 void draw(const Options& o) {
   namespace fs = std::filesystem;
   std::cout.flush();
@@ -691,7 +853,12 @@ void draw(const Options& o) {
 int main(int argc, char** argv) try {
   const Options o = parse(argc, argv);
   int rc = 0;
-  if (o.command == "spectrum") rc = spectrum(o);
+  if (!o.bag.empty() && o.command != "spectrum" && o.command != "poincare" && o.command != "safety")
+    throw std::runtime_error("--bag works with spectrum, poincare and safety, not " + o.command);
+  if (!o.bag.empty() && o.command == "spectrum") rc = spectrum_of_bag(o);
+  else if (!o.bag.empty() && o.command == "poincare") rc = poincare_of_bag(o);
+  else if (!o.bag.empty()) rc = safety_of_bag(o);
+  else if (o.command == "spectrum") rc = spectrum(o);
   else if (o.command == "poincare") rc = poincare(o);
   else if (o.command == "bifurcation") rc = bifurcation(o);
   else if (o.command == "lyapunov") rc = lyapunov(o);
