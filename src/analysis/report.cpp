@@ -1,5 +1,6 @@
 #include "gear_dynamics/analysis/report.hpp"
 
+#include "gear_dynamics/analysis/paper_reference.hpp"
 #include "gear_dynamics/analysis/report_text.hpp"
 #include "gear_dynamics/analysis/study_analysis.hpp"
 
@@ -27,12 +28,6 @@ std::string quoted(const std::string& text) {
   std::string q = "\"";
   for (char ch : text) q += ch == '"' ? std::string("\"\"") : std::string(1, ch);
   return q + "\"";
-}
-
-const PaperReference* paper_at(double mu) {
-  for (const PaperReference& p : paper_reference())
-    if (std::abs(p.mu - mu) < 1e-9) return &p;
-  return nullptr;
 }
 
 // The paper's Table 4 only applies to its own intervals.
@@ -428,13 +423,6 @@ void write_report_md(const ReportFiles& R, const std::string& sections) {
 }
 
 }  // namespace
-
-const std::vector<PaperReference>& paper_reference() {
-  static const std::vector<PaperReference> table = {
-      {0.00, 0.0515, -2.167, 91, 80}, {0.01, 0.0431, -10.59, 89, 79}, {0.02, 0.0511, 7.079, 85, 90},
-      {0.03, 0.0515, 6.854, 76, 90},  {0.04, 0.0508, -9.459, 87, 89}, {0.05, 0.0453, -28.38, 85, 87}};
-  return table;
-}
 
 std::vector<std::string> write_report(const std::string& folder, const BatchInputs& in, const BatchAnalysis& a,
                                       const StudyAnalysis* study, const std::string& sections) {

@@ -160,72 +160,76 @@ BatchAnalysis analyse_batch(const BatchInputs& in, const AnalysisSettings& setti
   return out;
 }
 
-void write_study_files(const std::string& folder, const BatchInputs& in, const StudyAnalysis& st,
-                       const AnalysisSettings& s, std::vector<std::string>& written, const std::string& sections) {
-  const fs::path dir(folder);
-  const auto open = [&](const std::string& name) {
-    const fs::path path = dir / name;
-    std::ofstream o(path);
-    if (!o) throw std::runtime_error("cannot write " + path.string());
-    written.push_back(path.string());
-    return o;
-  };
-  const auto close = [&](std::ofstream& o, const std::string& name) {
-    o.close();
-    if (!o) throw std::runtime_error("error writing " + (dir / name).string());
-  };
-  {
-    std::ofstream o = open("points.csv");
-    o << "point";
-    for (const SweepAxis& a : st.axes) o << ',' << column_name(a.key);
-    o << ",R,d_min[mm*s^-1/2],d_q1,d_median,d_median_low,d_median_high,d_q3,d_max,phase_n,phase_d_median[mm*s^-1/2],"
-         "s1_d[mm*s^-1/2]";
-    for (const char* p : {"d>median_phase_d", "d>d_S1", "delta_T_in", "delta_dot_T_in", "both_in", "t_ss<T"})
-      o << ',' << p << "_k," << p << "_n," << p << ',' << p << "_low," << p << "_high";
-    o << ",t_ss_median[s],t_ss_median_low,t_ss_median_high,t_ss_q1,t_ss_q3,delta_T_median[mm],delta_dot_T_median[mm/s],"
-         "phi_T_mean[mm/s^2],phi_T_sd[mm/s^2]\n";
-    for (const PointAnalysis& p : st.points) {
-      const MuAnalysis& m = p.stats;
-      const BoxStats& d = m.center_distance;
-      o << p.point;
-      for (double v : p.values) o << ',' << general(v);
-      o << ',' << d.n << ',' << general(d.min * U) << ',' << general(d.q1 * U) << ',' << general(d.median * U) << ',' << general(d.median_low * U)
-        << ',' << general(d.median_high * U) << ',' << general(d.q3 * U) << ',' << general(d.max * U) << ',' << m.phase_runs << ','
-        << general(m.phase_center_distance.median * U) << ',' << general(m.s1 ? m.s1->center_distance * U : std::nan(""));
-      for (const Proportion* q : {&m.d_exceeds_phase_median, &m.d_exceeds_s1, &m.delta_in_interval,
-                                  &m.delta_dot_in_interval, &p.both_in_interval, &m.reached_steady_state})
-        proportion_fields(o, *q);
-      const BoxStats& t = m.steady_state_time;
-      o << ',' << general(t.median) << ',' << general(t.median_low) << ',' << general(t.median_high) << ',' << general(t.q1) << ',' << general(t.q3)
-        << ',' << general(m.final_delta.median * U) << ',' << general(m.final_delta_dot.median * U) << ','
-        << general(p.final_phi_mean * U) << ',' << general(p.final_phi_sd * U) << '\n';
-    }
-    close(o, "points.csv");
-  }
-  {
-    std::ofstream o = open("axis_tests.csv");
-    o << "axis,fixed,points,kruskal_wallis_H,kruskal_wallis_df,kruskal_wallis_n,kruskal_wallis_p,friedman_chi2,"
-         "friedman_df,friedman_blocks,friedman_p,d_median_first[mm*s^-1/2],d_median_last[mm*s^-1/2]\n";
-    for (const AxisSlice& l : st.slices) {
-      std::string pts;
-      for (std::size_t p : l.points) pts += (pts.empty() ? "" : ";") + std::to_string(p);
-      const auto& k = l.kruskal_wallis;
-      const auto& f = l.friedman;
-      o << column_name(st.axes[l.axis].key) << ',' << fixed_text(st, l, ";", "=") << ',' << pts << ',' << general(k.statistic)
-        << ',' << k.df << ',' << k.n << ',' << general(k.p_value) << ',' << general(f.statistic) << ',' << f.df << ',' << f.n << ','
-        << general(f.p_value) << ',' << general(st.points[l.points.front()].stats.center_distance.median * U) << ','
-        << general(st.points[l.points.back()].stats.center_distance.median * U) << '\n';
-    }
-    close(o, "axis_tests.csv");
-  }
-  if (!st.swept()) return;
+namespace {
 
-  // ---- report.md, organised by axis ----
-  std::ofstream r = open("report.md");
-  const std::string pct = std::to_string(static_cast<int>(std::lround(100 * s.confidence))) + " %";
-  const auto interval = [](const Interval& i, int decimals) {
-    return "[" + fixed(i.lo * U, decimals) + ", " + fixed(i.hi * U, decimals) + "]";
-  };
+std::ofstream open_file(const fs::path& dir, const std::string& name, std::vector<std::string>& written) {
+  const fs::path path = dir / name;
+  std::ofstream o(path);
+  if (!o) throw std::runtime_error("cannot write " + path.string());
+  written.push_back(path.string());
+  return o;
+}
+
+void close_file(std::ofstream& o, const fs::path& dir, const std::string& name) {
+  o.close();
+  if (!o) throw std::runtime_error("error writing " + (dir / name).string());
+}
+
+// points.csv: one row per point, every statistic.
+void write_points_csv(const fs::path& dir, const StudyAnalysis& st, std::vector<std::string>& written) {
+  std::ofstream o = open_file(dir, "points.csv", written);
+  o << "point";
+  for (const SweepAxis& a : st.axes) o << ',' << column_name(a.key);
+  o << ",R,d_min[mm*s^-1/2],d_q1,d_median,d_median_low,d_median_high,d_q3,d_max,phase_n,phase_d_median[mm*s^-1/2],"
+       "s1_d[mm*s^-1/2]";
+  for (const char* p : {"d>median_phase_d", "d>d_S1", "delta_T_in", "delta_dot_T_in", "both_in", "t_ss<T"})
+    o << ',' << p << "_k," << p << "_n," << p << ',' << p << "_low," << p << "_high";
+  o << ",t_ss_median[s],t_ss_median_low,t_ss_median_high,t_ss_q1,t_ss_q3,delta_T_median[mm],delta_dot_T_median[mm/s],"
+       "phi_T_mean[mm/s^2],phi_T_sd[mm/s^2]\n";
+  for (const PointAnalysis& p : st.points) {
+    const MuAnalysis& m = p.stats;
+    const BoxStats& d = m.center_distance;
+    o << p.point;
+    for (double v : p.values) o << ',' << general(v);
+    o << ',' << d.n << ',' << general(d.min * U) << ',' << general(d.q1 * U) << ',' << general(d.median * U) << ',' << general(d.median_low * U)
+      << ',' << general(d.median_high * U) << ',' << general(d.q3 * U) << ',' << general(d.max * U) << ',' << m.phase_runs << ','
+      << general(m.phase_center_distance.median * U) << ',' << general(m.s1 ? m.s1->center_distance * U : std::nan(""));
+    for (const Proportion* q : {&m.d_exceeds_phase_median, &m.d_exceeds_s1, &m.delta_in_interval,
+                                &m.delta_dot_in_interval, &p.both_in_interval, &m.reached_steady_state})
+      proportion_fields(o, *q);
+    const BoxStats& t = m.steady_state_time;
+    o << ',' << general(t.median) << ',' << general(t.median_low) << ',' << general(t.median_high) << ',' << general(t.q1) << ',' << general(t.q3)
+      << ',' << general(m.final_delta.median * U) << ',' << general(m.final_delta_dot.median * U) << ','
+      << general(p.final_phi_mean * U) << ',' << general(p.final_phi_sd * U) << '\n';
+  }
+  close_file(o, dir, "points.csv");
+}
+
+// axis_tests.csv: one row per line of the grid.
+void write_axis_tests_csv(const fs::path& dir, const StudyAnalysis& st, std::vector<std::string>& written) {
+  std::ofstream o = open_file(dir, "axis_tests.csv", written);
+  o << "axis,fixed,points,kruskal_wallis_H,kruskal_wallis_df,kruskal_wallis_n,kruskal_wallis_p,friedman_chi2,"
+       "friedman_df,friedman_blocks,friedman_p,d_median_first[mm*s^-1/2],d_median_last[mm*s^-1/2]\n";
+  for (const AxisSlice& l : st.slices) {
+    std::string pts;
+    for (std::size_t p : l.points) pts += (pts.empty() ? "" : ";") + std::to_string(p);
+    const auto& k = l.kruskal_wallis;
+    const auto& f = l.friedman;
+    o << column_name(st.axes[l.axis].key) << ',' << fixed_text(st, l, ";", "=") << ',' << pts << ',' << general(k.statistic)
+      << ',' << k.df << ',' << k.n << ',' << general(k.p_value) << ',' << general(f.statistic) << ',' << f.df << ',' << f.n << ','
+      << general(f.p_value) << ',' << general(st.points[l.points.front()].stats.center_distance.median * U) << ','
+      << general(st.points[l.points.back()].stats.center_distance.median * U) << '\n';
+  }
+  close_file(o, dir, "axis_tests.csv");
+}
+
+std::string interval_text(const Interval& i, int decimals) {
+  return "[" + fixed(i.lo * U, decimals) + ", " + fixed(i.hi * U, decimals) + "]";
+}
+
+// report.md's head: the folders, the run counts, the grid and the units.
+void write_study_head(std::ostream& r, const BatchInputs& in, const StudyAnalysis& st, const AnalysisSettings& s,
+                      const std::string& pct) {
   r << "# gear_dynamics study report\n\nBatch folder(s): ";
   for (std::size_t i = 0; i < in.folders.size(); ++i) r << (i ? ", " : "") << "`" << in.folders[i] << "`";
   r << "\n\nT = " << in.config.run.duration << " s, h = " << in.config.run.time_step * 1e6 << " µs, window ["
@@ -242,9 +246,13 @@ void write_study_files(const std::string& folder, const BatchInputs& in, const S
   }
   r << "\nUnits: d in mm·s^-1/2, t_ss in s. Medians with their exact " << pct
     << " order-statistic interval, probabilities in % with " << pct << " Wilson intervals. δ(T) ∈ "
-    << interval(s.delta_interval, 4) << " mm, δ̇(T) ∈ " << interval(s.delta_dot_interval, 1)
+    << interval_text(s.delta_interval, 4) << " mm, δ̇(T) ∈ " << interval_text(s.delta_dot_interval, 1)
     << " mm/s (closed). Every number is also in points.csv (one row per point) and axis_tests.csv (one row per line "
        "of the grid below).\n";
+}
+
+// report.md's sections: for every line of the grid, its sentence and its table.
+void write_study_axes(std::ostream& r, const StudyAnalysis& st, const AnalysisSettings& s, const std::string& pct) {
   for (std::size_t axis = 0; axis < st.axes.size(); ++axis) {
     const std::string& key = st.axes[axis].key;
     if (st.axes[axis].values.size() < 2) continue;
@@ -281,6 +289,10 @@ void write_study_files(const std::string& folder, const BatchInputs& in, const S
       }
     }
   }
+}
+
+// report.md's tail: the sections from above, the figures, what was left out.
+void write_study_tail(std::ostream& r, const BatchInputs& in, const StudyAnalysis& st, const std::string& sections) {
   std::vector<std::size_t> varied;
   for (std::size_t a = 0; a < st.axes.size(); ++a)
     if (st.axes[a].values.size() > 1) varied.push_back(a);
@@ -296,7 +308,22 @@ void write_study_files(const std::string& folder, const BatchInputs& in, const S
     for (const SkippedFile& f : in.skipped) r << "| `" << f.file << "` | skipped | " << f.reason << " |\n";
     for (const std::string& m : in.missing) r << "| " << m << " | missing | |\n";
   }
-  close(r, "report.md");
+}
+
+}  // namespace
+
+void write_study_files(const std::string& folder, const BatchInputs& in, const StudyAnalysis& st,
+                       const AnalysisSettings& s, std::vector<std::string>& written, const std::string& sections) {
+  const fs::path dir(folder);
+  write_points_csv(dir, st, written);
+  write_axis_tests_csv(dir, st, written);
+  if (!st.swept()) return;
+  std::ofstream r = open_file(dir, "report.md", written);
+  const std::string pct = std::to_string(static_cast<int>(std::lround(100 * s.confidence))) + " %";
+  write_study_head(r, in, st, s, pct);
+  write_study_axes(r, st, s, pct);
+  write_study_tail(r, in, st, sections);
+  close_file(r, dir, "report.md");
 }
 
 }  // namespace gear_dynamics

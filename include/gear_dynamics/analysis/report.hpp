@@ -35,16 +35,6 @@ struct BatchInputs {
   std::vector<std::vector<double>> points;
 };
 
-// The paper's published numbers (Tables 3 and 4, §3.2.3), in its units, looked up by mu.
-struct PaperReference {
-  double mu;
-  double delta_T, delta_dot_T;        // Table 3 [mm], [mm/s]
-  double p_delta, p_delta_dot;        // Table 4 [%] for [0.04, 0.055] mm and [-16, 16] mm/s
-};
-const std::vector<PaperReference>& paper_reference();
-constexpr double kPaperExceedsS1 = 0.93;  // P(d > d_S1) at mu = 0.04 (93 of 100)
-constexpr double kPaperMuExceeds = 0.04;
-
 // Writes report.md and the CSV files into `folder` (created if needed). Throws std::runtime_error
 // if a file cannot be written. The names of the files written are returned.
 // With `study` (analyse_batch), also points.csv and axis_tests.csv; a study with more axes than mu
