@@ -71,55 +71,37 @@ const std::vector<Section<ModelConfig>>& model_sections() {
           .key("friction_direction", GD_MEMBER(gear.friction_direction),
                "constant: the paper's sign; reversing: reversed at the pitch point")
           .one_of(EnumNames<FrictionDirection>::names())
-          .optional()
           .key("mesh_stiffness", GD_MEMBER(gear.mesh_stiffness),
                "square_wave: the paper's two ISO 6336 levels; potential_energy: from the tooth geometry")
           .one_of(EnumNames<MeshStiffnessModel>::names())
-          .optional()
           .key("profile_shift1", GD_MEMBER(gear.profile_shift1), closed(-1, 1.5), "-", "x1, pinion profile shift")
-          .optional()
           .key("profile_shift2", GD_MEMBER(gear.profile_shift2), closed(-1, 1.5), "-", "x2, wheel profile shift")
-          .optional()
           .key("bore_radius1", GD_MEMBER(gear.bore_radius1), open(0, kInf), "m",
                "pinion bore radius (fillet foundation); below the root radius")
-          .optional()
           .key("bore_radius2", GD_MEMBER(gear.bore_radius2), open(0, kInf), "m",
                "wheel bore radius (fillet foundation); below the root radius")
-          .optional()
           .key("crack_gear", GD_MEMBER(gear.crack.gear), "gear with a root crack: none, pinion or wheel")
           .one_of(EnumNames<FaultyGear>::names())
-          .optional()
           .key("crack_tooth", GD_MEMBER(gear.crack.tooth), closed(0, 9999), "-",
                "cracked tooth; tooth 0 is in contact at theta1 = 0; below that gear's teeth")
-          .optional()
           .key("crack_depth", GD_MEMBER(gear.crack.depth), closed(0, 0.1), "m", "q, crack depth")
-          .optional()
           .key("crack_angle", GD_MEMBER(gear.crack.angle), open_closed(0, kPi / 2), "rad",
                "upsilon, crack angle to the tooth's centre line")
-          .optional()
           .key("spall_gear", GD_MEMBER(gear.spall.gear), "gear with a spall: none, pinion or wheel")
           .one_of(EnumNames<FaultyGear>::names())
-          .optional()
           .key("spall_tooth", GD_MEMBER(gear.spall.tooth), closed(0, 9999), "-", "spalled tooth; below that gear's teeth")
-          .optional()
           .key("spall_length", GD_MEMBER(gear.spall.length), closed(0, 0.1), "m", "spall extent along the line of action")
-          .optional()
           .key("spall_width", GD_MEMBER(gear.spall.width), closed(0, 1), "m", "spall extent across the face; at most face_width")
-          .optional()
           .key("spall_position", GD_MEMBER(gear.spall.position), closed(0, 10), "m",
                "radius of the spall's centre on its tooth, within the active profile")
-          .optional()
           .key("pinion_profile_errors", GD_MEMBER(profile_errors.pinion), closed(-1e-3, 1e-3), "m",
                "profile error of pinion teeth 0, 1, ... (static transmission error); the rest 0")
           .may_be_empty()
-          .optional()
           .key("wheel_profile_errors", GD_MEMBER(profile_errors.wheel), closed(-1e-3, 1e-3), "m",
                "profile error of wheel teeth 0, 1, ...; the rest 0")
           .may_be_empty()
-          .optional()
           .key("profile_error_sd", GD_MEMBER(profile_errors.sd), closed(0, 1e-3), "m",
                "sd of a normal profile error per tooth of both gears, drawn from run.seed, added")
-          .optional()
           .key("initial_deflection", GD_MEMBER(initial.deflection), closed(-1e-2, 1e-2), "m", "delta(0)")
           .key("initial_velocity", GD_MEMBER(initial.velocity), closed(-10, 10), "m/s", "delta_dot(0)"),
       Section<ModelConfig>("load", "load.")
