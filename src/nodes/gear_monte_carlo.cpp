@@ -11,11 +11,11 @@ int main(int argc, char** argv) {
   // SIGINT and SIGTERM stop the batch cleanly (finished bags kept) instead of shutting ROS down at once.
   gear_dynamics::install_stop_handlers(gear_dynamics::OnSigint::OnlyRemember);
   ros::NodeHandle pnh("~");
+  // A waiting aggregator tells this run's batch node from an earlier one by it (the launch clears
+  // the private namespace, so an older value is left only where no launch started a batch since).
+  pnh.setParam("start_time", ros::WallTime::now().toSec());
   gear_dynamics::MonteCarloNode node(pnh);
   int code = node.init();
   if (code == 0) code = node.run();
-  // A waiting aggregator that never saw this node alive (it refused its folder at once) learns from
-  // this that it has ended; the launch clears the private namespace, so the value is this run's.
-  pnh.setParam("exit_status", code);
   return code;
 }

@@ -93,6 +93,10 @@ bool node_alive(const std::string& node) {
   return answered;
 }
 
+// A batch node that left its ~start_time at most this long before the wait began is this run's
+// (a launch clears the node's namespace; an older value is an earlier run's, on a kept master).
+constexpr double kStartSlack = 60.0;  // [s] of wall time
+
 }  // namespace
 
 bool AggregatorNode::wait() {
@@ -100,8 +104,7 @@ bool AggregatorNode::wait() {
   ROS_INFO("gear_aggregator: waiting for the batch in %s", first.c_str());
   const ros::WallTime start = ros::WallTime::now();
   bool seen = false;
-  const std::string status_key = settings_.batch_node + "/exit_status";
-  const bool earlier_status = ros::param::has(status_key);
+  const std::string start_key = settings_.batch_node + "/start_time";
   // Whether every listed bag is there is asked again when a manifest was rewritten (a writer does
   // that after its last bag) and every 10 s besides: parsing the manifest of a large batch at every
   // poll would take CPU from the batch it waits for.
@@ -120,9 +123,10 @@ bool AggregatorNode::wait() {
       if (complete) return true;
     }
     const bool running = node_alive(settings_.batch_node);
-    // A batch node that ended before the first poll (a folder refused at once) is never seen alive;
-    // it leaves its exit status on the master (one there before this wait is an earlier run's).
-    if (running || (!earlier_status && ros::param::has(status_key))) seen = true;
+    // A batch node that ended before the first poll (a folder refused at once, or killed while this
+    // node was still starting under load) is never seen alive: its start time tells that it ran.
+    double started = 0.0;
+    if (running || (ros::param::get(start_key, started) && started >= start.toSec() - kStartSlack)) seen = true;
     if (seen && !running) {
       ROS_WARN("gear_aggregator: %s ended before its batch was complete; aggregating what it left",
                settings_.batch_node.c_str());

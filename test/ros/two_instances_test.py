@@ -19,8 +19,10 @@ from simtest import Collector, services
 
 GLOBAL = {'/clock', '/diagnostics', '/rosout'}
 # /clock goes out at most every 5 ms of wall time and a follower may step up to 1 ms ahead of the
-# clock it read (LiveSimulation::kMinWait); the rest is the two connections' delivery jitter.
-TOLERANCE = 0.05  # s
+# clock it read (LiveSimulation::kMinWait); the rest is the two connections' delivery jitter, which
+# reaches tens of ms on a loaded machine (59 ms seen in CI). A node on its own time line is off by
+# its start delay (0.6 s here), and more after every pause.
+TOLERANCE = 0.15  # s
 
 
 class ClockLog:
