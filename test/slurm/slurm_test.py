@@ -189,6 +189,10 @@ PartitionName=gd Nodes=localhost Default=YES MaxTime=INFINITE State=UP
 
     def states(self, job):
         """{job or array task id: state} of a job still known to slurmctld (MinJobAge)."""
+        return {key: fields.get("JobState", "?") for key, fields in self.jobs(job).items()}
+
+    def jobs(self, job):
+        """{job or array task id: scontrol's fields (JobState, Reason, ...)}."""
         text = self.out(["scontrol", "-o", "show", "job", job], check=False)
         found = {}
         for line in text.splitlines():
@@ -196,8 +200,33 @@ PartitionName=gd Nodes=localhost Default=YES MaxTime=INFINITE State=UP
             key = fields.get("JobId", "?")
             if "ArrayTaskId" in fields:
                 key = "%s_%s" % (fields.get("ArrayJobId"), fields["ArrayTaskId"])
-            found[key] = fields.get("JobState", "?")
+            found[key] = fields
         return found
+
+    def wait_idle(self, timeout):
+        """Waits until the node takes jobs again (no job left completing), naming its state if not."""
+        state = {}
+
+        def idle():
+            state["now"] = self.out(["sinfo", "-h", "-o", "%T %E"], check=False).strip()
+            return state["now"].split()[:1] == ["idle"]
+        try:
+            fl.wait_until(idle, timeout, "the node to be idle")
+        except AssertionError as e:
+            raise AssertionError("%s (sinfo: %s)" % (e, state.get("now")))
+
+    def diagnosis(self, job, logs):
+        """What a failed wait on a job reports: each task's state and reason, the node's state and
+        the tasks' and daemons' logs."""
+        tasks = ["%s %s (%s)" % (k, f.get("JobState"), f.get("Reason")) for k, f in sorted(self.jobs(job).items())]
+        node = self.out(["sinfo", "-h", "-o", "%T %E"], check=False).strip()
+        ctld = os.path.join(self.work, "log", "slurmctld.log")
+        tail = ""
+        if os.path.exists(ctld):
+            with open(ctld, errors="replace") as f:
+                tail = "".join(f.readlines()[-30:])
+        return "tasks: %s; node: %s\n%s\n---- slurmctld.log (end)\n%s" % (
+            ", ".join(tasks), node, logs_text(logs), tail)
 
     def wait_ended(self, job, timeout):
         fl.wait_until(lambda: not self.out(["squeue", "-h", "-j", job], check=False).strip(), timeout,
@@ -342,6 +371,7 @@ def main():
 
         def cancel_resubmit():
             output, logs = os.path.join(work, "cancel"), os.path.join(work, "cancel_logs")
+            cluster.wait_idle(60)
             job, agg = cluster.submit(output, logs)
             task = "%s_%d" % (job, CANCELLED_TASK)
             progress = {}
@@ -354,7 +384,16 @@ def main():
                 done = [f for f in files if os.path.exists(os.path.join(output, f))]
                 progress.update(done=len(done), total=len(files), complete=complete)
                 return bool(done)
-            fl.wait_until(some_bags, 120, "task %s to write some bags" % task)
+            # The task starts once two of the others have ended (2 CPUs, 1 each): it is waited for
+            # first, so that a slow machine is told apart from a task that never starts.
+            try:
+                def started():  # a pending task is listed under the array's range, not by its id
+                    time.sleep(0.2)
+                    return cluster.states(job).get(task, "PENDING") != "PENDING"
+                fl.wait_until(started, 300, "task %s to start" % task)
+                fl.wait_until(some_bags, 120, "task %s to write some bags" % task)
+            except AssertionError as e:
+                raise AssertionError("%s\n%s" % (e, cluster.diagnosis(job, logs)))
             cluster.out(["scancel", task])
             states = cluster.wait_ended(job, 120)
             agg_states = cluster.wait_ended(agg, 60)
