@@ -22,7 +22,7 @@
 #include "gear_dynamics/GearState.h"
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/config/simulator_settings.hpp"
-#include "gear_dynamics/dynamics/spectrum.hpp"
+#include "gear_dynamics/maths/spectrum.hpp"
 #include "gear_dynamics/live/live_simulation.hpp"
 
 namespace gd = gear_dynamics;

@@ -27,8 +27,6 @@ std::string scan_parameter_name(ScanParameter p) {
   return "?";
 }
 
-double mesh_period(const GearPair& gear) { return gear.mesh_period_angle / gear.in.pinion_speed; }
-
 ModelConfig with_parameter(const ModelConfig& base, ScanParameter p, double v) {
   ModelConfig c = base;
   switch (p) {

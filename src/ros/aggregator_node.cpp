@@ -13,8 +13,10 @@
 #include <csignal>
 #include <filesystem>
 
+#include "gear_dynamics/analysis/over_time.hpp"
 #include "gear_dynamics/analysis/study_analysis.hpp"
-#include "gear_dynamics/dynamics/batch_report.hpp"
+#include "gear_dynamics/report/report.hpp"
+#include "gear_dynamics/report/series_csv.hpp"
 #include "gear_dynamics/ros/batch_reader.hpp"
 #include "gear_dynamics/ros/conversions.hpp"
 #include "gear_dynamics/ros/report_message.hpp"
@@ -39,25 +41,27 @@ bool AggregatorNode::run() {
   }
   try {
     std::filesystem::create_directories(report_folder_);
+    // read -> analyse -> report. The series are handed over as each bag is read, not kept: the
+    // stochastic runs' reduced for the analyses over time (doc/gear_aggregator.md §8), the figures'
+    // runs written to series.csv.
+    SeriesDigests digests(settings_.analysis);
+    FigureSeries figure_series(report_folder_, settings_.series_mu);
     ReadOptions options;
-    options.series_csv = (std::filesystem::path(report_folder_) / "series.csv").string();
-    options.series_mu = settings_.series_mu;
-    // The stochastic runs' series are reduced as they are read, not kept (doc/gear_aggregator.md §8).
-    SeriesDigests series(settings_.analysis);
-    options.on_series = [&series](const BatchInputs& in, const RunRecord& run, const std::vector<double>& t,
-                                  const std::vector<double>& delta, const std::vector<double>& delta_dot) {
-      series.add(in, run, t, delta, delta_dot);
+    options.wants_series = [&figure_series](const ManifestRun& run) {
+      return run.kind == RunKind::Stochastic || figure_series.wants(run.kind, run.mu, run.realization);
+    };
+    options.on_series = [&](const BatchInputs& in, const RunRecord& run, const RunSeries& series) {
+      if (run.kind == RunKind::Stochastic) digests.add(in, run, series.t, series.delta, series.delta_dot);
+      if (figure_series.wants(run.kind, run.mu, run.index)) figure_series.add(run, series);
     };
     const BatchInputs inputs = read_batches(settings_.folders, options);
     StudyAnalysis study;  // per point and axis (doc/studies.md); the mu sweep's analysis is analyse()'s
     const BatchAnalysis analysis = analyse_batch(inputs, settings_.analysis, study);
-    // Safety over time, first passage, spectrum band, KDEs: the dynamics layer, above the report's.
-    const BatchOverTime over_time = analyse_over_time(inputs, analysis, series);
+    const BatchOverTime over_time = analyse_over_time(inputs, analysis, digests);
     for (const std::string& note : over_time.notes) ROS_WARN("gear_aggregator: %s", note.c_str());
-    std::vector<std::string> written;
-    const std::string sections = write_over_time(report_folder_, inputs, analysis, over_time, written);
-    const std::vector<std::string> report = write_report(report_folder_, inputs, analysis, &study, sections);
-    ROS_INFO("gear_aggregator: %zu files written", written.size() + report.size());
+    figure_series.write(inputs.runs);
+    const std::vector<std::string> report = write_report(report_folder_, inputs, analysis, &study, &over_time);
+    ROS_INFO("gear_aggregator: %zu files written", report.size() + 1);
     plot(true);
     publisher_.publish(make_report_message(inputs, analysis, report_folder_));
   } catch (const std::exception& ex) {

@@ -20,16 +20,14 @@ std::string emit(const YAML::Node& n) {
   return out.c_str();
 }
 
-fs::path bag_path(const std::string& folder, const std::string& name) { return fs::path(folder) / (name + ".bag"); }
+fs::path bag_path(const std::string& folder, const std::string& name) { return fs::path(folder) / bag_file_name(name); }
 fs::path active_path(const std::string& folder, const std::string& name) {
-  return fs::path(folder) / (name + ".bag.active");
+  return fs::path(folder) / active_file_name(name);
 }
 
 bool ends_with(const std::string& s, const std::string& tail) {
   return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
 }
-
-bool is_manifest(const std::string& file) { return file.rfind("manifest", 0) == 0 && ends_with(file, ".yaml"); }
 
 // Why the folder cannot take this shard of this batch, or "" if it can. Shards of one batch may
 // share a folder (each writes its own manifest); anything else is another batch.
@@ -37,50 +35,30 @@ std::string refusal(const fs::path& dir, const YAML::Node& config, const BatchSe
   bool manifests = false, other_files = false;
   for (const auto& entry : fs::directory_iterator(dir)) {
     const std::string file = entry.path().filename().string();
-    if (!is_manifest(file)) {
+    if (!is_manifest_file(file)) {
       other_files = other_files || !ends_with(file, ".tmp");  // a manifest being written
       continue;
     }
     manifests = true;
-    YAML::Node m;
+    Manifest m;
     try {
-      m = YAML::LoadFile(entry.path().string());
-    } catch (const YAML::Exception& e) {
-      return entry.path().string() + " is not valid YAML (" + e.what() + ")";
+      m = read_manifest(entry.path().string());
+    } catch (const ManifestError& e) {
+      return std::string("it holds a manifest that is not valid (") + e.what() + ")";
     }
-    if (!m.IsMap() || !m["format"] || m["format"].as<std::string>() != format)
-      return entry.path().string() + " is not a " + format + " manifest";
-    if (emit(m["config"]) != emit(config)) return "it holds a batch with a different configuration (" + file + ")";
-    // A manifest without the key predates it: generation 1.
-    const int numbers = m["numbers"] ? m["numbers"].as<int>() : 1;
-    if (numbers != kNumbersGeneration)
-      return "its bags hold numbers of generation " + std::to_string(numbers) + " (" + file + "), this build makes generation " +
+    if (m.format() != format) return entry.path().string() + " is not a " + format + " manifest";
+    if (emit(m.config) != emit(config)) return "it holds a batch with a different configuration (" + file + ")";
+    if (m.numbers != kNumbersGeneration)
+      return "its bags hold numbers of generation " + std::to_string(m.numbers) + " (" + file + "), this build makes generation " +
              std::to_string(kNumbersGeneration) + ": the same settings give other results now";
-    if (!m["shard_count"] || m["shard_count"].as<int>() != s.shard_count)
-      return "it holds the same batch split into " + (m["shard_count"] ? m["shard_count"].as<std::string>() : "?") +
-             " shards (" + file + "), not " + std::to_string(s.shard_count);
+    if (m.shard_count != s.shard_count)
+      return "it holds the same batch split into " + std::to_string(m.shard_count) + " shards (" + file + "), not " +
+             std::to_string(s.shard_count);
   }
   return !manifests && other_files ? "it is not empty and holds no manifest" : "";
 }
 
 }  // namespace
-
-std::string manifest_file(const BatchSettings& settings) {
-  if (settings.shard_count == 1) return "manifest.yaml";
-  return "manifest_shard" + std::to_string(settings.shard_index) + "of" + std::to_string(settings.shard_count) + ".yaml";
-}
-
-YAML::Node batch_config_yaml(const ModelConfig& model, const BatchSettings& settings) {
-  YAML::Node n = to_yaml(model);
-  n["monte_carlo"] = content_yaml(settings);
-  for (const SweepAxis& a : settings.sweep) {  // only a study has it: a mu sweep's config has no sweep key
-    YAML::Node values;
-    for (double v : a.values) values.push_back(v);
-    values.SetStyle(YAML::EmitterStyle::Flow);
-    n["monte_carlo"]["sweep"][a.key] = values;
-  }
-  return n;
-}
 
 const char* manifest_format(const Study& study) { return study.swept() ? kManifestFormatStudy : kManifestFormat; }
 
@@ -167,7 +145,7 @@ std::vector<RunSpec> prepare_folder(const Study& study, const BatchSettings& set
   if (ec || !fs::is_directory(dir))
     throw std::runtime_error("monte_carlo.output_dir = '" + settings.output_dir + "' cannot be created: " + ec.message());
 
-  const std::string why = refusal(dir, batch_config_yaml(model, settings), settings, manifest_format(study));
+  const std::string why = refusal(dir, manifest_config(model, settings), settings, manifest_format(study));
   if (!why.empty()) {
     if (!settings.overwrite) {
       throw std::runtime_error("monte_carlo.output_dir = '" + settings.output_dir + "' is refused: " + why +
@@ -175,7 +153,7 @@ std::vector<RunSpec> prepare_folder(const Study& study, const BatchSettings& set
     }
     for (const auto& entry : fs::directory_iterator(dir)) {
       const std::string f = entry.path().filename().string();
-      if (ends_with(f, ".bag") || ends_with(f, ".bag.active") || is_manifest(f)) fs::remove(entry.path());
+      if (ends_with(f, ".bag") || ends_with(f, kActiveSuffix) || is_manifest_file(f)) fs::remove(entry.path());
     }
   }
 
@@ -200,44 +178,20 @@ void write_manifest(const ModelConfig& model, const BatchSettings& settings,
 
 void write_manifest(const Study& study, const BatchSettings& settings,
                     const std::vector<RunSpec>& runs, bool complete) {
-  const ModelConfig& model = study.base;
-  const bool swept = study.swept();
-  YAML::Emitter out;
-  out << YAML::BeginMap;
-  out << YAML::Key << "format" << YAML::Value << manifest_format(study);
-  out << YAML::Key << "package_version" << YAML::Value << GEAR_DYNAMICS_VERSION;
-  out << YAML::Key << "numbers" << YAML::Value << kNumbersGeneration;  // engine/ensemble.hpp
-  out << YAML::Key << "complete" << YAML::Value << complete;  // every run's bag was written
-  out << YAML::Key << "config" << YAML::Value << batch_config_yaml(model, settings);
-  out << YAML::Key << "shard_index" << YAML::Value << settings.shard_index;
-  out << YAML::Key << "shard_count" << YAML::Value << settings.shard_count;
-  if (swept) {  // format 2: the grid, one entry per point with its value on every axis
-    out << YAML::Key << "axes" << YAML::Value << YAML::Flow << study.keys();
-    out << YAML::Key << "points" << YAML::Value << YAML::BeginSeq;
-    for (const StudyPoint& p : study.points)
-      out << YAML::Flow << YAML::BeginMap << YAML::Key << "point" << YAML::Value << p.index << YAML::Key << "values"
-          << YAML::Value << YAML::Flow << p.values << YAML::EndMap;
-    out << YAML::EndSeq;
+  Manifest m;
+  m.study = study.swept();
+  m.package_version = package_version();
+  m.numbers = kNumbersGeneration;
+  m.complete = complete;
+  m.config = manifest_config(study.base, settings);
+  m.shard_index = settings.shard_index;
+  m.shard_count = settings.shard_count;
+  if (m.study) {
+    m.axes = study.keys();
+    for (const StudyPoint& p : study.points) m.points.push_back(p.values);
   }
-  out << YAML::Key << "runs" << YAML::Value << YAML::BeginSeq;
-  for (const RunSpec& r : runs) {
-    out << YAML::Flow << YAML::BeginMap << YAML::Key << "name" << YAML::Value << r.name << YAML::Key << "kind"
-        << YAML::Value << to_string(r.kind) << YAML::Key << "mu" << YAML::Value << r.mu << YAML::Key << "realization"
-        << YAML::Value << r.index;
-    if (swept) out << YAML::Key << "point" << YAML::Value << r.point;
-    out << YAML::Key << "file" << YAML::Value << r.name + ".bag" << YAML::EndMap;
-  }
-  out << YAML::EndSeq << YAML::EndMap;
-
-  const fs::path dir(settings.output_dir), final_path = dir / manifest_file(settings);
-  const fs::path tmp = dir / (final_path.filename().string() + ".tmp");
-  {
-    std::ofstream f(tmp);
-    f << out.c_str() << "\n";
-    f.close();
-    if (!f) throw std::runtime_error("cannot write " + tmp.string());
-  }
-  fs::rename(tmp, final_path);
+  for (const RunSpec& r : runs) m.runs.push_back({r.name, bag_file_name(r.name), r.kind, r.mu, r.index, r.point});
+  write_manifest_file(settings.output_dir, m);
 }
 
 BagSink::BagSink(const ModelConfig& model, std::string folder, std::size_t queue_capacity)

@@ -7,7 +7,6 @@
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
-#include <yaml-cpp/eventhandler.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -15,7 +14,6 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <functional>
 #include <map>
 #include <memory>
@@ -29,7 +27,7 @@
 #include "gear_dynamics/PoincarePoint.h"
 #include "gear_dynamics/RunInfo.h"
 #include "gear_dynamics/RunSummary.h"
-#include "gear_dynamics/analysis/report_text.hpp"
+#include "gear_dynamics/ros/conversions.hpp"  // the topics of a run bag
 
 namespace gear_dynamics {
 
@@ -37,26 +35,14 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct ManifestRun {
-  std::string name, file;
-  RunKind kind = RunKind::Stochastic;
-  double mu = 0;
-  std::uint32_t realization = 0;
-  std::size_t point = 0;  // format 2; for format 1 set from mu once all manifests are read
-};
-
-struct Manifest {
+// A manifest of the folders read, with what the reader compares across manifests and bags.
+struct FolderManifest : Manifest {
   fs::path path;
-  ModelConfig config;
-  std::string config_key;
-  int shard_index = 0, shard_count = 1;
-  std::vector<ManifestRun> runs;
-  bool study = false;                       // format 2 (doc/batch-folder.md §3)
-  std::vector<std::string> axes;            // format 2: the swept keys
-  std::vector<std::vector<double>> points;  // format 2: each point's value on every axis
-  std::vector<std::string> point_keys;      // format 2: config_key of each point
-  std::string grid;                         // format 2: axes and points as text, to compare manifests
-  std::string content;                      // config.monte_carlo (what the batch holds) as text
+  ModelConfig model;                     // its config, parsed
+  std::string config_key;                // model as text, mu and phi0 set aside (config_key)
+  std::vector<std::string> point_keys;   // format 2: config_key of each point
+  std::string grid;                      // format 2: axes and points as text, to compare manifests
+  std::string content;                   // config.monte_carlo (what the batch holds) as text
 };
 
 // Why a bag is not used.
@@ -88,155 +74,40 @@ std::string first_difference(const std::string& a, const std::string& b) {
 
 bool same(double a, double b) { return std::abs(a - b) <= 1e-12 * std::max(1.0, std::abs(b)); }
 
-// Checks a YAML text's syntax without building yaml-cpp's tree (throws YAML::ParserException).
-class SyntaxOnly : public YAML::EventHandler {
- public:
-  void OnDocumentStart(const YAML::Mark&) override {}
-  void OnDocumentEnd() override {}
-  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
-  void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
-  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t, const std::string&) override {}
-  void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {}
-  void OnSequenceEnd() override {}
-  void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t, YAML::EmitterStyle::value) override {}
-  void OnMapEnd() override {}
-};
-
-// A manifest's text split into its top-level `runs:` block sequence, one text per item (each
-// parsed alone as `runs:` + item), and the rest with `runs:` left empty: yaml-cpp's tree of a
-// whole manifest costs kilobytes per run (bench/README.md §8). False if the
-// text has no such block (then it is parsed whole).
-bool split_runs(const std::string& text, std::string& rest, std::vector<std::string>& items) {
-  std::istringstream in(text);
-  std::string line;
-  std::size_t indent = std::string::npos;  // of the items' "-"
-  bool inside = false, found = false;
-  while (std::getline(in, line)) {
-    if (!inside && line.rfind("runs:", 0) == 0 && line.find_first_not_of(' ', 5) == std::string::npos) {
-      inside = found = true;
-      rest += line + '\n';
-      continue;
-    }
-    if (inside) {
-      const std::size_t first = line.find_first_not_of(' ');
-      if (first == std::string::npos || line[first] == '#') {  // blank or comment: to the item in hand
-        if (!items.empty()) items.back() += line + '\n';
-        continue;
-      }
-      const bool dash = line[first] == '-' && (first + 1 == line.size() || line[first + 1] == ' ');
-      if (indent == std::string::npos) {
-        if (!dash) return false;  // not a block sequence
-        indent = first;
-      }
-      if (first > indent || (first == indent && dash)) {  // an item's line, or a new item
-        if (first == indent && dash) items.emplace_back();
-        items.back() += line + '\n';
-        continue;
-      }
-      inside = false;  // the next top-level key
-    }
-    rest += line + '\n';
-  }
-  return found && indent != std::string::npos;
-}
-
-Manifest parse_manifest(const fs::path& path) {
-  const auto fail = [&](const std::string& why) -> void { throw BatchReadError("manifest " + path.string() + ": " + why); };
-  Manifest m;
-  m.path = path;
-  YAML::Node root;
-  std::vector<std::string> items;  // the runs, if split_runs could split them off
+FolderManifest parse_manifest(const fs::path& path) {
+  FolderManifest m;
   try {
-    std::ifstream file(path);
-    if (!file) throw YAML::BadFile(path.string());
-    std::ostringstream text;
-    text << file.rdbuf();
-    std::istringstream syntax(text.str());
-    YAML::Parser parser(syntax);
-    SyntaxOnly ignore;
-    parser.HandleNextDocument(ignore);  // the whole text's syntax errors first, as one tree's
-    std::string rest;
-    root = YAML::Load(split_runs(text.str(), rest, items) ? rest : text.str());
-  } catch (const YAML::Exception& ex) {
-    fail(std::string("not readable as YAML: ") + ex.what());
+    static_cast<Manifest&>(m) = read_manifest(path.string());
+    m.path = path;
+    m.model = manifest_model(m, path.string());
+  } catch (const ManifestError& ex) {
+    throw BatchReadError(ex.what());
   }
-  try {
-    if (!root.IsMap()) fail("not a YAML map");
-    const std::string format = root["format"] ? root["format"].as<std::string>() : "(missing)";
-    if (format != kManifestFormat && format != kManifestFormatStudy)
-      fail("format is '" + format + "', expected '" + kManifestFormat + "' or '" + kManifestFormatStudy + "'");
-    m.study = format == kManifestFormatStudy;
-    try {
-      m.config = parse_config(root["config"]);
-    } catch (const ConfigError& ex) {
-      fail(std::string("its config is not a valid model configuration: ") + ex.what());
-    }
-    m.config_key = config_key(m.config);
-    if (root["config"]["monte_carlo"]) {
-      YAML::Emitter e;
-      e << YAML::Flow << root["config"]["monte_carlo"];
-      m.content = e.c_str();
-    }
-    if (m.study) {
-      m.axes = root["axes"].as<std::vector<std::string>>();
-      if (m.axes.empty() || m.axes.front() != kFrictionKey) fail("axes must start with " + std::string(kFrictionKey));
-      const YAML::Node points = root["points"];
-      if (!points || !points.IsSequence()) fail("points must be a list");
-      for (std::size_t i = 0; i < points.size(); ++i) {
-        if (points[i]["point"].as<std::size_t>() != i) fail("points[" + std::to_string(i) + "].point must be " + std::to_string(i));
-        const auto values = points[i]["values"].as<std::vector<double>>();
-        if (values.size() != m.axes.size()) fail("points[" + std::to_string(i) + "] needs one value per axis");
-        try {
-          m.point_keys.push_back(config_key(apply_point(m.config, m.axes, values)));
-        } catch (const ConfigError& ex) {
-          fail("points[" + std::to_string(i) + "] is not a valid configuration: " + ex.what());
-        }
-        m.points.push_back(values);
+  m.config_key = config_key(m.model);
+  if (m.config["monte_carlo"]) {
+    YAML::Emitter e;
+    e << YAML::Flow << m.config["monte_carlo"];
+    m.content = e.c_str();
+  }
+  if (m.study) {
+    for (std::size_t i = 0; i < m.points.size(); ++i) {
+      try {
+        m.point_keys.push_back(config_key(apply_point(m.model, m.axes, m.points[i])));
+      } catch (const ConfigError& ex) {
+        throw BatchReadError("manifest " + path.string() + ": points[" + std::to_string(i) +
+                             "] is not a valid configuration: " + ex.what());
       }
-      YAML::Emitter e;
-      e << YAML::Flow << m.axes << m.points;
-      m.grid = e.c_str();
     }
-    m.shard_index = root["shard_index"].as<int>();
-    m.shard_count = root["shard_count"].as<int>();
-    if (m.shard_count < 1 || m.shard_index < 0 || m.shard_index >= m.shard_count)
-      fail("shard_index = " + std::to_string(m.shard_index) + " is out of range for shard_count = " +
-           std::to_string(m.shard_count));
-    const YAML::Node runs = root["runs"];
-    if (!runs || !(runs.IsSequence() || runs.IsNull())) fail("runs must be a list");
-    const std::size_t count = items.empty() ? (runs.IsSequence() ? runs.size() : 0) : items.size();
-    for (std::size_t i = 0; i < count; ++i) {
-      const YAML::Node r = items.empty() ? runs[i] : YAML::Load("runs:\n" + items[i])["runs"][0];
-      ManifestRun e;
-      e.name = r["name"].as<std::string>();
-      e.file = r["file"].as<std::string>();
-      e.mu = r["mu"].as<double>();
-      e.realization = r["realization"].as<std::uint32_t>();
-      if (m.study) {
-        e.point = r["point"].as<std::size_t>();
-        if (e.point >= m.points.size()) fail("runs[" + std::to_string(i) + "].point is not among the points");
-        if (!same(m.points[e.point][0], e.mu)) fail("runs[" + std::to_string(i) + "].mu differs from its point's");
-      }
-      const auto kind = run_kind_from(r["kind"].as<std::string>());
-      if (!kind) fail("runs[" + std::to_string(i) + "].kind = '" + r["kind"].as<std::string>() + "' is not S1, phase or stochastic");
-      e.kind = *kind;
-      if (e.file.empty() || fs::path(e.file).filename() != e.file)
-        fail("runs[" + std::to_string(i) + "].file = '" + e.file + "' must be a file name inside the folder");
-      m.runs.push_back(e);
-    }
-  } catch (const YAML::Exception& ex) {
-    fail(std::string("missing or mistyped field: ") + ex.what());
+    YAML::Emitter e;
+    e << YAML::Flow << m.axes << m.points;
+    m.grid = e.c_str();
   }
   return m;
 }
 
-std::vector<fs::path> manifests_in(const fs::path& folder) {
+std::vector<fs::path> manifest_paths(const fs::path& folder) {
   std::vector<fs::path> out;
-  for (const auto& f : fs::directory_iterator(folder)) {
-    const std::string name = f.path().filename().string();
-    if (f.is_regular_file() && name.rfind("manifest", 0) == 0 && f.path().extension() == ".yaml") out.push_back(f.path());
-  }
-  std::sort(out.begin(), out.end());
+  for (const std::string& p : manifests_in(folder.string())) out.emplace_back(p);
   return out;
 }
 
@@ -249,22 +120,21 @@ struct BagContents {
   std::uint32_t infos = 0, summaries = 0;
   RunInfo info;
   RunSummary summary;
-  std::string series;  // GearState rows in the paper's units, if asked for
-  std::vector<double> t, delta, delta_dot;  // every GearState, if asked for (SI)
+  RunSeries series;  // every GearState, if asked for (SI)
   std::vector<double> section_t, section_delta, section_delta_dot;  // every PoincarePoint (SI)
 };
 
-// Reads one bag (the series rows only if `e` is given, the states only if `states`) with `bag`, a
+// Reads one bag (its states only if `states`) with `bag`, a
 // closed Bag that is reopened for each file: constructing a rosbag::Bag crawls the ROS packages for
 // its encryptor plugin, which costs more than reading a small bag. Throws Skip or rosbag's
 // exceptions (the caller then replaces `bag`).
-BagContents read_bag(rosbag::Bag& bag, const fs::path& path, const ManifestRun* e, bool states) {
+BagContents read_bag(rosbag::Bag& bag, const fs::path& path, bool states) {
   const auto require = [](bool ok, const std::string& why) {
     if (!ok) throw Skip(why);
   };
   bag.open(path.string(), rosbag::bagmode::Read);
   std::vector<std::string> topics{kRunInfoTopic, kSummaryTopic, kPoincareTopic};
-  if (e || states) topics.emplace_back(kStateTopic);
+  if (states) topics.emplace_back(kStateTopic);
   BagContents c;
   for (const rosbag::MessageInstance& m : rosbag::View(bag, rosbag::TopicQuery(topics))) {
     const std::string& topic = m.getTopic();
@@ -287,26 +157,10 @@ BagContents read_bag(rosbag::Bag& bag, const fs::path& path, const ManifestRun* 
     } else {
       const GearState::ConstPtr s = m.instantiate<GearState>();
       require(s != nullptr, topic + " holds " + m.getDataType() + ", not gear_dynamics/GearState");
-      if (states) {
-        c.t.push_back(s->t);
-        c.delta.push_back(s->delta);
-        c.delta_dot.push_back(s->delta_dot);
-      }
-      if (e) {
-        std::string& row = c.series;
-        row += e->name;
-        row += ',';
-        row += to_string(e->kind);
-        row += ',';
-        report_text::append_general(row, e->mu);
-        row += ',';
-        row += std::to_string(e->realization);
-        for (const double x : {s->t, s->delta * kToPaperUnits, s->delta_dot * kToPaperUnits, s->phi * kToPaperUnits}) {
-          row += ',';
-          report_text::append_general(row, x);
-        }
-        row += '\n';
-      }
+      c.series.t.push_back(s->t);
+      c.series.delta.push_back(s->delta);
+      c.series.delta_dot.push_back(s->delta_dot);
+      c.series.phi.push_back(s->phi);
     }
   }
   bag.close();
@@ -321,10 +175,10 @@ void fields(Stream& stream, Contents& c) {
   stream.next(c.summaries);
   stream.next(c.info);
   stream.next(c.summary);
-  stream.next(c.series);
-  stream.next(c.t);
-  stream.next(c.delta);
-  stream.next(c.delta_dot);
+  stream.next(c.series.t);
+  stream.next(c.series.delta);
+  stream.next(c.series.delta_dot);
+  stream.next(c.series.phi);
   stream.next(c.section_t);
   stream.next(c.section_delta);
   stream.next(c.section_delta_dot);
@@ -358,10 +212,9 @@ bool write_all(int fd, const void* data, std::size_t size) {
   return true;
 }
 
-// One bag to read, with its series rows if `series_of` is set and its states if `states`.
+// One bag to read, with its states if `states`.
 struct BagJob {
   fs::path file;
-  const ManifestRun* series_of = nullptr;
   bool states = false;
 };
 
@@ -389,7 +242,7 @@ using TakeBag = std::function<void(std::size_t, BagRead&)>;
     std::uint8_t status = 0;
     std::vector<std::uint8_t> payload;
     try {
-      payload = serialize(read_bag(*bag, jobs[i].file, jobs[i].series_of, jobs[i].states));
+      payload = serialize(read_bag(*bag, jobs[i].file, jobs[i].states));
     } catch (const std::exception& ex) {
       bag = std::make_unique<rosbag::Bag>();
       status = dynamic_cast<const Skip*>(&ex) ? 1 : 2;
@@ -554,7 +407,7 @@ class ParametersCache {
 
 // The run record of bag `read` of run `e`, if it is that run of this batch (its Poincaré points
 // moved out of `read`); else throws Skip.
-RunRecord check_run(BagRead& read, const ManifestRun& e, const Manifest& manifest, ParametersCache& parameters) {
+RunRecord check_run(BagRead& read, const ManifestRun& e, const FolderManifest& manifest, ParametersCache& parameters) {
   const auto require = [](bool ok, const std::string& why) {
     if (!ok) throw Skip(why);
   };
@@ -568,7 +421,7 @@ RunRecord check_run(BagRead& read, const ManifestRun& e, const Manifest& manifes
   const RunSummary* summary = &bag.summary;
 
   // Is it this run of this batch?
-  const ModelConfig& c = manifest.config;
+  const ModelConfig& c = manifest.model;
   require(info->kind == to_string(e.kind) && info->realization == e.realization && same(info->mu, e.mu),
           "run_info is run (" + info->kind + ", realization " + std::to_string(info->realization) + ", mu " +
               std::to_string(info->mu) + "), the manifest lists (" + to_string(e.kind) + ", " +
@@ -635,13 +488,13 @@ std::vector<fs::path> distinct_folders(const std::vector<std::string>& folder_ar
 }
 
 // Each run listed in a manifest, by name, with the manifest that listed it first.
-using Listed = std::map<std::string, std::pair<ManifestRun, const Manifest*>>;
+using Listed = std::map<std::string, std::pair<ManifestRun, const FolderManifest*>>;
 
 // The folders' manifests, checked to be one batch (one model configuration, format, grid and
 // monte_carlo content), the runs they list, and the shards seen (shard_count -> indices).
 // Not copyable: `listed` points into `manifests`.
 struct Listing {
-  std::vector<Manifest> manifests;
+  std::vector<FolderManifest> manifests;
   Listed listed;
   std::map<int, std::set<int>> shards;
   Listing() = default;
@@ -650,16 +503,16 @@ struct Listing {
 };
 
 void list_runs(const std::vector<fs::path>& folders, Listing& listing) {
-  std::vector<Manifest>& manifests = listing.manifests;
+  std::vector<FolderManifest>& manifests = listing.manifests;
   Listed& listed = listing.listed;
   std::map<int, std::set<int>>& shards = listing.shards;
   for (const fs::path& folder : folders) {
-    const auto paths = manifests_in(folder);
+    const auto paths = manifest_paths(folder);
     if (paths.empty())
       throw BatchReadError("batch folder '" + folder.string() + "' has no manifest.yaml (not a batch folder, or the batch has not started)");
     for (const fs::path& p : paths) manifests.push_back(parse_manifest(p));
   }
-  for (const Manifest& m : manifests) {
+  for (const FolderManifest& m : manifests) {
     if (m.study != manifests.front().study || m.grid != manifests.front().grid)
       throw BatchReadError("manifests " + manifests.front().path.string() + " and " + m.path.string() +
                            " belong to different batches: their formats or study grids differ");
@@ -685,7 +538,7 @@ void list_runs(const std::vector<fs::path>& folders, Listing& listing) {
 // The batch's axes and points: a study's from its manifest, a mu sweep's (format 1) one point per
 // mu, ascending as its report; each listed run gets its point.
 void set_points(BatchInputs& in, Listing& listing) {
-  const std::vector<Manifest>& manifests = listing.manifests;
+  const std::vector<FolderManifest>& manifests = listing.manifests;
   Listed& listed = listing.listed;
   if (manifests.front().study) {
     for (std::size_t a = 0; a < manifests.front().axes.size(); ++a) {
@@ -741,7 +594,7 @@ struct Candidate {
   fs::path folder, file;
   bool tried = false;
   std::optional<RunRecord> record;
-  std::string rows, reason;  // the file holding its series rows (if any), or why it is not usable
+  std::string reason;  // why it is not usable
 };
 using Candidates = std::map<std::string, std::vector<Candidate>>;
 
@@ -759,24 +612,20 @@ Candidates candidates_of(const Listed& listed, const std::vector<fs::path>& fold
 }
 
 // Reads the candidates in rounds: each reads the next bag of every run still without a usable one,
-// until none is left to try. series_wanted: series.csv is written (options.series_csv).
-void read_candidates(BatchInputs& in, Candidates& candidates, const Listed& listed, const ReadOptions& options,
-                     bool series_wanted) {
+// until none is left to try.
+void read_candidates(BatchInputs& in, Candidates& candidates, const Listed& listed, const ReadOptions& options) {
   ParametersCache parameters;
   for (;;) {
     std::vector<BagJob> jobs;
-    std::vector<std::pair<Candidate*, const std::pair<ManifestRun, const Manifest*>*>> round;
+    std::vector<std::pair<Candidate*, const std::pair<ManifestRun, const FolderManifest*>*>> round;
     for (auto& [name, list] : candidates) {
       const auto& entry = listed.at(name);
       const ManifestRun& e = entry.first;
-      const bool wants_series = series_wanted && same(e.mu, options.series_mu) &&
-                                (e.kind == RunKind::S1 || (e.kind == RunKind::Stochastic && e.realization <= 1));
+      const bool wants_series = options.on_series && options.wants_series && options.wants_series(e);
       for (Candidate& c : list) {
         if (c.record) break;
         if (c.tried) continue;
-        // Every stochastic run's states, for options.on_series: safety over time, first passage
-        // and the spectrum (doc/gear_aggregator.md §5).
-        jobs.push_back({c.file, wants_series ? &e : nullptr, options.on_series && e.kind == RunKind::Stochastic});
+        jobs.push_back({c.file, wants_series});
         round.emplace_back(&c, &entry);
         break;
       }
@@ -789,15 +638,8 @@ void read_candidates(BatchInputs& in, Candidates& candidates, const Listed& list
       c.tried = true;
       try {
         c.record = check_run(read, round[i].second->first, *round[i].second->second, parameters);
-        BagContents& bag = *read.contents;
-        if (!bag.series.empty()) {  // to a file of its own until series.csv is written in the listed order
-          c.rows = options.series_csv + "." + round[i].second->first.name + ".part";
-          std::ofstream part(c.rows, std::ios::binary);
-          part << bag.series;
-          if (!part.flush()) throw BatchReadError("cannot write " + c.rows);
-        }
-        if (options.on_series && c.record->kind == RunKind::Stochastic && !bag.t.empty())
-          options.on_series(in, *c.record, bag.t, bag.delta, bag.delta_dot);
+        const RunSeries& series = read.contents->series;
+        if (options.on_series && !series.t.empty()) options.on_series(in, *c.record, series);
       } catch (const Skip& ex) {
         c.reason = ex.what();
       }
@@ -813,10 +655,9 @@ void read_candidates(BatchInputs& in, Candidates& candidates, const Listed& list
   }
 }
 
-// The runs used, in the listed order (their series rows appended to series.csv), the skipped
-// duplicates and unusable bags, and the runs with no usable bag; throws if a folder gave nothing.
-void choose_runs(BatchInputs& in, Candidates& candidates, const Listed& listed, const std::vector<fs::path>& folders,
-                 std::ofstream& series, const std::string& series_csv) {
+// The runs used, in the listed order, the skipped duplicates and unusable bags, and the runs with
+// no usable bag; throws if a folder gave nothing.
+void choose_runs(BatchInputs& in, Candidates& candidates, const Listed& listed, const std::vector<fs::path>& folders) {
   std::map<fs::path, std::size_t> usable;  // runs each folder provides
   for (const auto& [name, entry] : listed) {
     std::string used;
@@ -828,10 +669,6 @@ void choose_runs(BatchInputs& in, Candidates& candidates, const Listed& listed, 
         in.runs.push_back(std::move(*c.record));
         used = c.file.string();
         ++usable[c.folder];
-        if (!c.rows.empty()) {
-          series << std::ifstream(c.rows, std::ios::binary).rdbuf();
-          fs::remove(c.rows);
-        }
       } else {
         skip(in, c.file, c.reason);
       }
@@ -840,10 +677,6 @@ void choose_runs(BatchInputs& in, Candidates& candidates, const Listed& listed, 
       ROS_WARN("batch: run %s has no usable bag", name.c_str());
       in.missing.push_back(name);
     }
-  }
-  if (series.is_open()) {
-    series.close();
-    if (!series) throw BatchReadError("error writing " + series_csv);
   }
   for (const fs::path& folder : folders)
     if (!usable[folder])
@@ -861,20 +694,14 @@ BatchInputs read_batches(const std::vector<std::string>& folder_args, const Read
   for (const auto& f : folders) in.folders.push_back(f.string());
   Listing listing;
   list_runs(folders, listing);
-  in.config = listing.manifests.front().config;
+  in.config = listing.manifests.front().model;
   in.expected_runs = listing.listed.size();
   set_points(in, listing);
   note_missing_shards(in, listing.shards);
   skip_unlisted(in, folders, listing.listed);
-  std::ofstream series;
-  if (!options.series_csv.empty()) {
-    series.open(options.series_csv);
-    if (!series) throw BatchReadError("cannot write " + options.series_csv);
-    series << "run,kind,mu,index,t[s],delta[mm],delta_dot[mm/s],phi[mm/s^2]\n";
-  }
   Candidates candidates = candidates_of(listing.listed, folders);
-  read_candidates(in, candidates, listing.listed, options, series.is_open());
-  choose_runs(in, candidates, listing.listed, folders, series, options.series_csv);
+  read_candidates(in, candidates, listing.listed, options);
+  choose_runs(in, candidates, listing.listed, folders);
   ROS_INFO("batch: %zu of %zu runs read from %zu folder(s) in %.2f s; %zu bags skipped, %zu missing (runs or shards)",
            in.runs.size(), in.expected_runs, folders.size(),
            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), in.skipped.size(),
@@ -884,7 +711,7 @@ BatchInputs read_batches(const std::vector<std::string>& folder_args, const Read
 
 bool batch_complete(const std::string& folder) {
   try {
-    const auto paths = manifests_in(folder);
+    const auto paths = manifest_paths(folder);
     if (paths.empty()) return false;
     for (const fs::path& p : paths)
       for (const ManifestRun& e : parse_manifest(p).runs)
@@ -898,7 +725,7 @@ bool batch_complete(const std::string& folder) {
 std::string manifests_signature(const std::string& folder) {
   std::ostringstream out;
   try {
-    for (const fs::path& p : manifests_in(folder)) {
+    for (const fs::path& p : manifest_paths(folder)) {
       struct stat st {};
       if (::stat(p.c_str(), &st) != 0) continue;
       out << p.filename().string() << ' ' << st.st_ino << ' ' << st.st_size << ' ' << st.st_mtim.tv_sec << '.'

@@ -2,6 +2,8 @@
 
 #include <xmlrpcpp/XmlRpcValue.h>
 
+#include "gear_dynamics/batch/manifest.hpp"  // package_version
+
 namespace gear_dynamics {
 
 namespace {
@@ -64,7 +66,7 @@ RunInfo make_run_info(const ModelConfig& config, RunKind kind, std::uint32_t rea
                       double duration, std::string parameters_yaml) {
   RunInfo m;
   m.header.stamp = sim_stamp(0.0);
-  m.package_version = GEAR_DYNAMICS_VERSION;
+  m.package_version = package_version();
   m.kind = to_string(kind);
   m.seed = config.seed;
   m.realization = realization;

@@ -16,13 +16,13 @@
 #include <string>
 #include <vector>
 
-#include "gear_dynamics/analysis/statistics.hpp"
+#include "gear_dynamics/maths/statistics.hpp"
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/dynamics/bifurcation.hpp"
 #include "gear_dynamics/dynamics/lyapunov.hpp"
 #include "gear_dynamics/dynamics/poincare.hpp"
-#include "gear_dynamics/dynamics/safety.hpp"
-#include "gear_dynamics/dynamics/spectrum.hpp"
+#include "gear_dynamics/maths/safety.hpp"
+#include "gear_dynamics/maths/spectrum.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
 #include "gear_dynamics/ros/live_bag.hpp"
 #include "cli.hpp"

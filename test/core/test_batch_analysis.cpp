@@ -9,7 +9,7 @@
 
 #include "gear_dynamics/analysis/batch_analysis.hpp"
 #include "gear_dynamics/config/config.hpp"
-#include "gear_dynamics/analysis/report.hpp"
+#include "gear_dynamics/report/report.hpp"
 
 namespace gd = gear_dynamics;
 namespace fs = std::filesystem;

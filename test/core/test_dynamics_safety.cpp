@@ -4,8 +4,8 @@
 #include <cmath>
 #include <random>
 
-#include "gear_dynamics/dynamics/batch_report.hpp"
-#include "gear_dynamics/dynamics/safety.hpp"
+#include "gear_dynamics/analysis/over_time.hpp"
+#include "gear_dynamics/maths/safety.hpp"
 
 namespace gd = gear_dynamics;
 

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <random>
 
-#include "gear_dynamics/dynamics/spectrum.hpp"
+#include "gear_dynamics/maths/spectrum.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
 #include "gear_dynamics/model/gear_pair.hpp"
 

@@ -5,7 +5,7 @@
 #include <limits>
 #include <random>
 
-#include "gear_dynamics/analysis/statistics.hpp"
+#include "gear_dynamics/maths/statistics.hpp"
 
 namespace gd = gear_dynamics;
 

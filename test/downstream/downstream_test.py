@@ -24,13 +24,16 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 # A function of each library, called by the downstream executable: with --as-needed (Debian's
 # default) a library none of whose symbols is used is dropped, so each must be used to be checked.
 CALLS = {
+    "maths": "gd::wilson(3, 10).estimate + gd::welch_psd(std::vector<double>(64, 1.0), 1000.0, {16, 0.5}).sample_rate",
     "model": "gd::derive(gd::GearInputs{}).contact_ratio",
     "engine": "gd::grid_time(83123000, 1e-6)",
-    "config": "gd::mu_label(0.04).size() + std::string(gd::to_string(gd::RunKind::S1)).size()",
+    "config": "gd::mu_label(0.04).size()",
+    "batch": "gd::manifest_file_name(0, 1).size() + std::string(gd::to_string(gd::RunKind::S1)).size()",
     "live": "gd::to_string(gd::LoadInput::Sde).size()",
     "montecarlo": "gd::shard_runs({}, 0, 1).size()",
-    "analysis": "gd::wilson(3, 10).estimate",
-    "dynamics": "gd::welch_psd(std::vector<double>(64, 1.0), 1000.0, {16, 0.5}).sample_rate",
+    "dynamics": "gd::LorenzLanes({}, 1e-3, {{1.0, 1.0, 1.0}}).time()",
+    "analysis": "gd::analyse_study(gd::BatchInputs{}, gd::AnalysisSettings{}).points.size()",
+    "report": "gd::paper_reference().size()",
     "ros": "gd::make_poincare_point(gd::SectionPoint{}).t",
     "aggregation": "static_cast<double>(gd::batch_complete(\"/nonexistent\"))",
 }

@@ -12,6 +12,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -22,7 +23,8 @@
 #include "gear_dynamics/PoincarePoint.h"
 #include "gear_dynamics/RunInfo.h"
 #include "gear_dynamics/RunSummary.h"
-#include "gear_dynamics/analysis/report.hpp"
+#include "gear_dynamics/report/report.hpp"
+#include "gear_dynamics/report/series_csv.hpp"
 #include "gear_dynamics/ros/batch_reader.hpp"
 
 namespace gd = gear_dynamics;
@@ -190,12 +192,19 @@ int dump_bag(const std::string& path) {
 }
 
 int dump_batch(const std::string& folder, const std::string& csv, const std::string& json) {
+  const double series_mu = 0.04;
+  const std::string csv_folder = std::filesystem::path(csv).parent_path().string();
+  gd::FigureSeries figure_series(csv_folder.empty() ? "." : csv_folder, series_mu);
   gd::ReadOptions options;
-  options.series_csv = csv;
-  options.series_mu = 0.04;
+  options.wants_series = [&](const gd::ManifestRun& run) { return figure_series.wants(run.kind, run.mu, run.realization); };
+  options.on_series = [&](const gd::BatchInputs&, const gd::RunRecord& run, const gd::RunSeries& series) {
+    figure_series.add(run, series);
+  };
   const gd::BatchInputs in = gd::read_batches({folder}, options);
+  const std::string written = figure_series.write(in.runs);
+  if (written != csv) std::filesystem::rename(written, csv);
   std::ofstream out(json);
-  out << "{\"to_paper_units\":" << num(gd::kToPaperUnits) << ",\"series_mu\":" << num(options.series_mu)
+  out << "{\"to_paper_units\":" << num(gd::kToPaperUnits) << ",\"series_mu\":" << num(series_mu)
             << ",\"skipped\":" << in.skipped.size() << ",\"missing\":" << in.missing.size() << ",\"runs\":[";
   for (std::size_t i = 0; i < in.runs.size(); ++i) {
     const gd::RunRecord& r = in.runs[i];

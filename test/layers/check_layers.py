@@ -15,16 +15,21 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 from junit_cases import run_cases  # noqa: E402
 
 # The core's layers and what each depends on directly (a DAG). A layer may include its own headers
-# and those of every layer it reaches; siblings (live, montecarlo, analysis on config) may not
-# include each other.
+# and those of every layer it reaches; siblings (live, montecarlo, dynamics, analysis) may not
+# include each other. maths (statistics, spectra) sits beside model at the bottom, so that live
+# and the analysis both use it; batch is the batch folder's contract (manifest, run records) that
+# the batch runner writes to and the analysis reads from; report writes every file of the report.
 LAYERS = {
+    "maths": [],
     "model": [],
     "engine": ["model"],
-    "config": ["engine"],
-    "live": ["config"],
-    "montecarlo": ["config"],
-    "analysis": ["config"],
-    "dynamics": ["analysis"],
+    "config": ["engine", "maths"],
+    "batch": ["config"],
+    "live": ["config", "maths"],
+    "montecarlo": ["batch"],
+    "dynamics": ["config", "maths"],
+    "analysis": ["batch", "maths"],
+    "report": ["analysis"],
 }
 # Folders above the core, allowed ROS: the ROS libraries, the nodes' mains and the CLIs.
 OUTSIDE = {"ros", "nodes", "tools"}
@@ -118,7 +123,9 @@ def self_check():
     assert violations("engine", '#include "gear_dynamics/config/config.hpp"\n'), "upward include not caught"
     assert violations("live", '#include "gear_dynamics/montecarlo/batch.hpp"\n'), "sibling include not caught"
     assert violations("analysis", '#include "gear_dynamics/live/live_simulation.hpp"\n'), "sibling include not caught"
-    assert violations("config", '#include "gear_dynamics/maths/x.hpp"\n'), "undeclared layer not caught"
+    assert violations("config", '#include "gear_dynamics/plots/x.hpp"\n'), "undeclared layer not caught"
+    assert violations("analysis", '#include "gear_dynamics/report/report.hpp"\n'), "upward include not caught"
+    assert violations("analysis", '#include "gear_dynamics/dynamics/poincare.hpp"\n'), "sibling include not caught"
     assert violations("analysis", "#include <ros/ros.h>\n"), "ROS header not caught"
     assert violations("config", '#include "gear_dynamics/GearState.h"\n'), "message header not caught"
     assert not violations("analysis", '#include "gear_dynamics/model/gear_pair.hpp"\n#include <vector>\n')

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "gear_dynamics/report/series_csv.hpp"
 #include "gear_dynamics/ros/batch_reader.hpp"
 #include "gear_dynamics/ros/conversions.hpp"
 #include "gear_dynamics/ros/report_message.hpp"
@@ -166,9 +167,16 @@ std::vector<std::uint8_t> bytes_of(gd::BatchReport m) {
 TEST_F(BatchReader, CleanBatchReadsBackExactly) {
   const auto runs = all_runs();
   write_batch(root_ / "a", runs, config_);
+  // The reader writes nothing: the figures' series go to the report layer's FigureSeries.
+  fs::create_directories(root_ / "report");
+  gd::FigureSeries figure_series((root_ / "report").string(), 0.04);
   gd::ReadOptions options;
-  options.series_csv = (root_ / "series.csv").string();
+  options.wants_series = [&](const gd::ManifestRun& run) { return figure_series.wants(run.kind, run.mu, run.realization); };
+  options.on_series = [&](const gd::BatchInputs&, const gd::RunRecord& run, const gd::RunSeries& series) {
+    figure_series.add(run, series);
+  };
   const gd::BatchInputs in = gd::read_batches({(root_ / "a").string()}, options);
+  const std::string series_csv = figure_series.write(in.runs);
   EXPECT_EQ(in.expected_runs, runs.size());
   ASSERT_EQ(in.runs.size(), runs.size());
   EXPECT_TRUE(in.skipped.empty());
@@ -184,8 +192,8 @@ TEST_F(BatchReader, CleanBatchReadsBackExactly) {
     EXPECT_EQ(it->final_delta, value(r, 4.5e-5));
     EXPECT_EQ(it->snapshot_times, config_.run.snapshot_times);
   }
-  // Series of S1, S2 (r 0) and S3 (r 1) at mu = 0.04 (options.series_mu): 3 runs x 401 states.
-  std::ifstream series(options.series_csv);
+  // Series of S1, S2 (r 0) and S3 (r 1) at mu = 0.04: 3 runs x 401 states, nothing else left.
+  std::ifstream series(series_csv);
   std::string line;
   std::getline(series, line);
   EXPECT_EQ(line, "run,kind,mu,index,t[s],delta[mm],delta_dot[mm/s],phi[mm/s^2]");
@@ -194,6 +202,7 @@ TEST_F(BatchReader, CleanBatchReadsBackExactly) {
   EXPECT_EQ(rows.size(), 3u);
   for (const char* name : {"mu0.0400_S1", "mu0.0400_r00000", "mu0.0400_r00001"})
     EXPECT_EQ(rows[name], 401) << name;
+  EXPECT_EQ(std::distance(fs::directory_iterator(root_ / "report"), fs::directory_iterator()), 1);
 }
 
 TEST_F(BatchReader, BadBagsAreSkippedNamedAndCounted) {
@@ -300,7 +309,14 @@ TEST_F(BatchReader, FoldersWithoutUsableBagsAreErrors) {
   EXPECT_HAS(error_of({(root_ / "bad").string()}), "has no usable bag (2 skipped, 2 runs missing)");
   // A broken manifest names its file and the problem.
   std::ofstream(root_ / "empty" / "manifest.yaml") << "format: gear_dynamics_batch/1\nconfig: {}\n";
+  EXPECT_HAS(error_of({(root_ / "empty").string()}), "manifest.yaml: shard_index is missing");
+  std::ofstream(root_ / "empty" / "manifest.yaml")
+      << "format: gear_dynamics_batch/1\nconfig: {}\nshard_index: 0\nshard_count: 1\nruns: []\n";
   EXPECT_HAS(error_of({(root_ / "empty").string()}), "manifest.yaml: its config is not a valid model configuration");
+  std::ofstream(root_ / "empty" / "manifest.yaml")
+      << "format: gear_dynamics_batch/1\nconfig: {}\nshard_index: 0\nshard_count: 1\n"
+         "runs: [{name: a, kind: S1, mu: x, realization: 0, file: a.bag}]\n";
+  EXPECT_HAS(error_of({(root_ / "empty").string()}), "manifest.yaml: runs[0].mu = 'x' is not of the expected type");
   // Manifests of different batches.
   gd::ModelConfig other = config_;
   other.seed = 7;
@@ -390,13 +406,14 @@ TEST_F(BatchReader, ManifestStylesReadTheSameRunsAndSeriesStreamOut) {
   };
   std::size_t series_runs = 0, states = 0;
   gd::ReadOptions options;
-  options.on_series = [&](const gd::BatchInputs&, const gd::RunRecord& run, const std::vector<double>& t,
-                          const std::vector<double>& delta, const std::vector<double>& delta_dot) {
+  options.wants_series = [](const gd::ManifestRun& run) { return run.kind == gd::RunKind::Stochastic; };
+  options.on_series = [&](const gd::BatchInputs&, const gd::RunRecord& run, const gd::RunSeries& series) {
     EXPECT_EQ(run.kind, gd::RunKind::Stochastic);
-    EXPECT_EQ(delta.size(), t.size());
-    EXPECT_EQ(delta_dot.size(), t.size());
+    EXPECT_EQ(series.delta.size(), series.t.size());
+    EXPECT_EQ(series.delta_dot.size(), series.t.size());
+    EXPECT_EQ(series.phi.size(), series.t.size());
     ++series_runs;
-    states += t.size();
+    states += series.t.size();
   };
   const gd::BatchInputs reference = gd::read_batches({(root_ / "a").string()}, options);
   EXPECT_EQ(series_runs, 12u);

@@ -10,30 +10,11 @@
 #include <string>
 #include <vector>
 
-#include "gear_dynamics/analysis/statistics.hpp"
+#include "gear_dynamics/batch/run_record.hpp"
+#include "gear_dynamics/maths/statistics.hpp"
 #include "gear_dynamics/config/analysis_settings.hpp"
-#include "gear_dynamics/config/run_kind.hpp"
 
 namespace gear_dynamics {
-
-// What the analysis keeps of one run (from its RunSummary). SI units.
-struct RunRecord {
-  std::string name;
-  RunKind kind = RunKind::Stochastic;
-  double mu = 0;
-  std::uint32_t index = 0;  // realization (stochastic) or phase index j (phase)
-  std::size_t point = 0;    // study point (BatchInputs::points); for a mu sweep, mu's rank
-  double center_distance = 0;         // d over the window [m s^-1/2]
-  double steady_state_time = 0;       // t_ss [s]
-  double steady_state_time_fine = 0;  // t_ss at the finer threshold [s]
-  bool reached_steady_state = false;  // t_ss < T
-  double final_delta = 0, final_delta_dot = 0, final_phi = 0;  // at T [m], [m/s], [m/s^2]
-  std::vector<double> snapshot_times, snapshot_delta, snapshot_delta_dot;  // [s], [m], [m/s]
-  // The /gear/poincare section of a deterministic run (S1, phase): (delta, delta_dot) at mesh
-  // phase 0 once per mesh period; empty for stochastic runs and in bags written before it was
-  // recorded (doc/batch-folder.md §5). [s], [m], [m/s]
-  std::vector<double> section_times, section_delta, section_delta_dot;
-};
 
 // Statistics of one friction coefficient.
 struct MuAnalysis {

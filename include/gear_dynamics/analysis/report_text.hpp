@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <string>
 
-#include "gear_dynamics/analysis/statistics.hpp"
+#include "gear_dynamics/maths/statistics.hpp"
 
 namespace gear_dynamics::report_text {
 

@@ -8,7 +8,6 @@
 #include <vector>
 
 #include "gear_dynamics/analysis/batch_analysis.hpp"
-#include "gear_dynamics/analysis/report.hpp"
 
 namespace gear_dynamics {
 
@@ -41,12 +40,5 @@ StudyAnalysis analyse_study(const BatchInputs& inputs, const AnalysisSettings& s
 // with more axes one entry per point (in point order, labelled by the point in every CSV) and the
 // rank tests across all points.
 BatchAnalysis analyse_batch(const BatchInputs& inputs, const AnalysisSettings& settings, StudyAnalysis& study);
-
-// Writes points.csv (one row per point, one column per axis, every statistic) and axis_tests.csv
-// (one row per line of the grid); for a study with more axes also report.md organised by axis,
-// with `sections` (markdown, write_report's) before its figure list.
-void write_study_files(const std::string& folder, const BatchInputs& inputs, const StudyAnalysis& study,
-                       const AnalysisSettings& settings, std::vector<std::string>& written,
-                       const std::string& sections = "");
 
 }  // namespace gear_dynamics

@@ -9,26 +9,9 @@
 #include <vector>
 
 #include "gear_dynamics/config/section.hpp"
+#include "gear_dynamics/maths/statistics.hpp"  // BinSpec, Interval, kConfidence
 
 namespace gear_dynamics {
-
-// The default confidence level of every interval reported.
-constexpr double kConfidence = 0.95;
-
-// Equal-width bin edges lo, lo + w, ..., hi, computed as lo + i (hi - lo) / n like numpy.linspace,
-// so an independent check can rebuild them. n = (hi - lo) / width must be a whole number.
-struct BinSpec {
-  double lo = 0, hi = 1, width = 1;
-  std::size_t bins() const;
-  std::vector<double> edges() const;
-};
-// Throws std::invalid_argument naming `name`, the values and the rule if the spec is unusable.
-void validate(const BinSpec& spec, const std::string& name);
-
-struct Interval {
-  double lo = 0, hi = 0;  // closed
-  bool contains(double x) const { return x >= lo && x <= hi; }
-};
 
 // The analysis parameters (the `analysis` section of config/aggregator.yaml), SI units.
 struct AnalysisSettings {

@@ -38,9 +38,6 @@ struct ScanValue {
   std::string regime;
 };
 
-// The mesh period [s] and the reference velocity scale v_ref = sqrt(2 Phi0 b) [m/s] of a configuration.
-double mesh_period(const GearPair& gear);
-
 std::vector<ScanValue> bifurcation_scan(const ModelConfig& base, ScanParameter parameter,
                                         const std::vector<double>& values, const ScanOptions& options = {});
 

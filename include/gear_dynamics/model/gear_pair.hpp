@@ -102,6 +102,9 @@ struct GearPair {
   double mesh_frequency() const { return in.pinion_speed / mesh_period_angle; }
 };
 
+// The mesh period phi_n / Omega [s].
+inline double mesh_period(const GearPair& gear) { return gear.mesh_period_angle / gear.in.pinion_speed; }
+
 // The first time t >= 0 at which the mesh phase (phi0 + Omega t mod phi_n) is 0, i.e. a mesh period
 // starts: 0 if phi0 = 0, else (phi_n - phi0) / Omega [s]. The Poincare sections sample there, then
 // every mesh period phi_n / Omega (doc/nonlinear-dynamics.md §3).

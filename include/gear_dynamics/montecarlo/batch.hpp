@@ -18,7 +18,7 @@
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
 #include "gear_dynamics/engine/simulation.hpp"
-#include "gear_dynamics/config/run_kind.hpp"
+#include "gear_dynamics/batch/run_kind.hpp"
 
 namespace gear_dynamics {
 

@@ -1,6 +1,6 @@
-// The batch folder contract (doc/batch-folder.md §4-§9): one LZ4 bag per run, written as <name>.bag.active and
-// renamed after a clean close (RunInfo first, the decimated GearState series, RunSummary last), a
-// manifest written atomically, and resume. Writer: gear_monte_carlo; reader: gear_aggregator.
+// Writing a batch folder (doc/batch-folder.md §4-§9): one LZ4 bag per run, written as <name>.bag.active and
+// renamed after a clean close (RunInfo first, the decimated GearState series, RunSummary last), the
+// manifest (batch/manifest.hpp), and resume. Writer: gear_monte_carlo; reader: ros/batch_reader.
 #pragma once
 
 #include <yaml-cpp/yaml.h>
@@ -20,15 +20,12 @@
 #include <variant>
 #include <vector>
 
+#include "gear_dynamics/batch/manifest.hpp"
 #include "gear_dynamics/montecarlo/batch.hpp"
 #include "gear_dynamics/ros/bag_writer.hpp"
 #include "gear_dynamics/ros/conversions.hpp"
 
 namespace gear_dynamics {
-
-// The manifest's `config`: the model (to_yaml) plus the `monte_carlo` settings that define the
-// batch's content. Two batches are the same batch if these are equal.
-YAML::Node batch_config_yaml(const ModelConfig& model, const BatchSettings& settings);
 
 // The RunInfo a run's bag starts with. For a study with more than the friction axis its
 // parameters_yaml also holds `study: {point: i, values: {key: value, ...}}` (doc/batch-folder.md §6.1).
@@ -76,10 +73,7 @@ std::vector<RunSpec> prepare_folder(const ModelConfig& model, const BatchSetting
 std::vector<RunSpec> prepare_folder(const Study& study, const BatchSettings& settings,
                                     const std::vector<RunSpec>& runs);
 
-// manifest.yaml, or manifest_shard<i>of<n>.yaml for shard i of n > 1 (shards may share a folder).
-std::string manifest_file(const BatchSettings& settings);
-
-// Writes the manifest into settings.output_dir atomically (temporary file, then rename).
+// Writes this shard's manifest (batch/manifest.hpp) into settings.output_dir.
 void write_manifest(const ModelConfig& model, const BatchSettings& settings,
                     const std::vector<RunSpec>& runs, bool complete);
 void write_manifest(const Study& study, const BatchSettings& settings,

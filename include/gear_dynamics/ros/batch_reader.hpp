@@ -1,5 +1,6 @@
 // Reads Monte Carlo batch folders (doc/batch-folder.md §10: manifest*.yaml plus one bag
-// per run) into one fixed-size record per run, streaming each bag with rosbag::View. A bag that is
+// per run) into one fixed-size record per run (batch/run_record.hpp), streaming each bag with
+// rosbag::View; it writes nothing. A bag that is
 // unfinished (.active), truncated, corrupted, of another batch or not listed is skipped with a
 // warning naming the file and the reason; listed runs without a usable bag are reported missing.
 #pragma once
@@ -9,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "gear_dynamics/analysis/report.hpp"
-#include "gear_dynamics/ros/conversions.hpp"  // topics of a run bag, manifest format
+#include "gear_dynamics/batch/manifest.hpp"
+#include "gear_dynamics/batch/run_record.hpp"
 
 namespace gear_dynamics {
 
@@ -22,17 +23,12 @@ class BatchReadError : public std::runtime_error {
 };
 
 struct ReadOptions {
-  // Where the decimated series of S1, S2 and S3 (realizations 0 and 1) at friction series_mu go,
-  // as CSV in the paper's units (for Figs. 5-7); empty: no series are read.
-  std::string series_csv;
-  double series_mu = 0.04;
-  // Called with each stochastic run's /gear/state series [s], [m], [m/s] as its bag is read and
-  // found to be that run (`inputs` holds the batch's configuration and points; its runs are not
-  // read yet), so the series can be reduced instead of kept (SeriesDigests). Calls come from the
-  // reader threads one at a time. Unset: the states are not read.
-  std::function<void(const BatchInputs& inputs, const RunRecord& run, const std::vector<double>& time,
-                     const std::vector<double>& delta, const std::vector<double>& delta_dot)>
-      on_series;
+  // Which runs' /gear/state series are read (unset: none), each handed to on_series as its bag is
+  // read and found to be that run (`inputs` holds the batch's configuration and points; its runs
+  // are not read yet), so that a series can be reduced or written instead of kept. Calls come
+  // from the reader threads one at a time.
+  std::function<bool(const ManifestRun& run)> wants_series;
+  std::function<void(const BatchInputs& inputs, const RunRecord& run, const RunSeries& series)> on_series;
 };
 
 // Reads and merges the folders (shards of one batch, or one folder several shards wrote into).

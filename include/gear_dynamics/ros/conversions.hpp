@@ -12,7 +12,7 @@
 #include "gear_dynamics/PoincarePoint.h"
 #include "gear_dynamics/RunInfo.h"
 #include "gear_dynamics/RunSummary.h"
-#include "gear_dynamics/config/run_kind.hpp"
+#include "gear_dynamics/batch/run_kind.hpp"
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
 #include "gear_dynamics/engine/simulation.hpp"
@@ -32,16 +32,12 @@ YAML::Node yaml_from_parameters(const ros::NodeHandle& nh, const std::vector<std
 YAML::Node yaml_from_namespace(const ros::NodeHandle& nh);
 ModelConfig load_model_config(const ros::NodeHandle& nh);
 
-// The batch folder contract (doc/batch-folder.md §2, §5): topics of a run bag and the manifest format.
+// The topics of a run bag (doc/batch-folder.md §2, §5); the manifest is batch/manifest.hpp's.
 constexpr const char* kRunInfoTopic = "/gear/run_info";
 constexpr const char* kStateTopic = "/gear/state";
 constexpr const char* kSummaryTopic = "/gear/summary";
 // The Poincare section of a deterministic run (S1, phase): one PoincarePoint per mesh period.
 constexpr const char* kPoincareTopic = "/gear/poincare";
-constexpr const char* kManifestFormat = "gear_dynamics_batch/1";
-// A study with more axes than mu (config/sweep.hpp): points, a point per run, names p<iiii>_...
-// Readers of format 1 refuse it rather than pool its points by mu.
-constexpr const char* kManifestFormatStudy = "gear_dynamics_batch/2";
 
 RunInfo make_run_info(const ModelConfig& config, RunKind kind, std::uint32_t realization,
                       double mu, double sigma, double duration);

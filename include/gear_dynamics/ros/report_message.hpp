@@ -4,7 +4,7 @@
 #include <string>
 
 #include "gear_dynamics/BatchReport.h"
-#include "gear_dynamics/analysis/report.hpp"
+#include "gear_dynamics/report/report.hpp"
 
 namespace gear_dynamics {
 

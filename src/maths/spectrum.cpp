@@ -1,4 +1,4 @@
-#include "gear_dynamics/dynamics/spectrum.hpp"
+#include "gear_dynamics/maths/spectrum.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 
 #include <boost/math/distributions/normal.hpp>
 
-#include "gear_dynamics/analysis/statistics.hpp"
+#include "gear_dynamics/maths/statistics.hpp"
 
 namespace gear_dynamics {
 

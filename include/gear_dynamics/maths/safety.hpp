@@ -5,7 +5,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "gear_dynamics/analysis/statistics.hpp"
+#include "gear_dynamics/maths/statistics.hpp"
 
 namespace gear_dynamics {
 

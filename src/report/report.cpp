@@ -1,8 +1,4 @@
-#include "gear_dynamics/analysis/report.hpp"
-
-#include "gear_dynamics/analysis/paper_reference.hpp"
-#include "gear_dynamics/analysis/report_text.hpp"
-#include "gear_dynamics/analysis/study_analysis.hpp"
+#include "gear_dynamics/report/report.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -10,6 +6,10 @@
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+
+#include "gear_dynamics/analysis/report_text.hpp"
+#include "gear_dynamics/report/paper_reference.hpp"
+#include "sections.hpp"
 
 namespace gear_dynamics {
 
@@ -425,12 +425,13 @@ void write_report_md(const ReportFiles& R, const std::string& sections) {
 }  // namespace
 
 std::vector<std::string> write_report(const std::string& folder, const BatchInputs& in, const BatchAnalysis& a,
-                                      const StudyAnalysis* study, const std::string& sections) {
+                                      const StudyAnalysis* study, const BatchOverTime* over_time) {
   const fs::path dir(folder);
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) throw std::runtime_error("cannot create report folder " + folder + ": " + ec.message());
   std::vector<std::string> written;
+  const std::string sections = over_time ? write_over_time(folder, in, a, *over_time, written) : "";
   const AnalysisSettings& s = a.settings;
   const ReportFiles files{dir, in, a, s, paper_intervals(s), a.key_header.empty() ? "mu" : a.key_header,
                           std::to_string(static_cast<int>(std::lround(100 * s.confidence))) + " %", written};

@@ -1,4 +1,4 @@
-#include "gear_dynamics/analysis/statistics.hpp"
+#include "gear_dynamics/maths/statistics.hpp"
 
 #include <algorithm>
 #include <boost/math/distributions/binomial.hpp>
@@ -11,6 +11,35 @@
 #include <stdexcept>
 
 namespace gear_dynamics {
+
+std::size_t BinSpec::bins() const { return static_cast<std::size_t>(std::llround((hi - lo) / width)); }
+
+std::vector<double> BinSpec::edges() const {
+  const std::size_t n = bins();
+  const double step = (hi - lo) / static_cast<double>(n);
+  std::vector<double> e(n + 1);
+  for (std::size_t i = 0; i < n; ++i) e[i] = lo + static_cast<double>(i) * step;
+  e[n] = hi;
+  return e;
+}
+
+void validate(const BinSpec& s, const std::string& name) {
+  std::ostringstream e;
+  e.precision(12);
+  if (!(std::isfinite(s.lo) && std::isfinite(s.hi) && s.lo < s.hi)) {
+    e << name << " = [" << s.lo << ", " << s.hi << "] is not an interval; needs finite lo < hi";
+  } else if (!(s.width > 0.0 && s.width <= s.hi - s.lo)) {
+    e << name << ".width = " << s.width << " is out of range; allowed (0, hi - lo = " << s.hi - s.lo << "]";
+  } else {
+    const double n = (s.hi - s.lo) / s.width;
+    if (std::abs(n - std::round(n)) > 1e-6 * n || n > 1e6) {
+      e << name << ": (hi - lo) / width = " << n << " is not a whole number of bins (at most 1e6)";
+    } else {
+      return;
+    }
+  }
+  throw std::invalid_argument(e.str());
+}
 
 namespace {
 

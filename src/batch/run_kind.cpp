@@ -1,4 +1,4 @@
-#include "gear_dynamics/config/run_kind.hpp"
+#include "gear_dynamics/batch/run_kind.hpp"
 
 namespace gear_dynamics {
 

@@ -8,9 +8,26 @@
 #include <string>
 #include <vector>
 
-#include "gear_dynamics/config/analysis_settings.hpp"  // BinSpec, kConfidence
-
 namespace gear_dynamics {
+
+// The default confidence level of every interval reported.
+constexpr double kConfidence = 0.95;
+
+// Equal-width bin edges lo, lo + w, ..., hi, computed as lo + i (hi - lo) / n like numpy.linspace,
+// so an independent check can rebuild them. n = (hi - lo) / width must be a whole number.
+struct BinSpec {
+  double lo = 0, hi = 1, width = 1;
+  std::size_t bins() const;
+  std::vector<double> edges() const;
+};
+// Throws std::invalid_argument naming `name`, the values and the rule if the spec is unusable.
+void validate(const BinSpec& spec, const std::string& name);
+
+// A closed interval [lo, hi].
+struct Interval {
+  double lo = 0, hi = 0;  // closed
+  bool contains(double x) const { return x >= lo && x <= hi; }
+};
 
 // Quantile of a sorted sample by linear interpolation (Hyndman-Fan type 7, numpy's and R's
 // default): h = (n - 1) p, x[floor h] + (h - floor h) (x[floor h + 1] - x[floor h]).

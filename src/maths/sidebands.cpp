@@ -2,7 +2,7 @@
 // compiler makes for welch_psd in spectrum.cpp changes its last bits with what else that file holds.
 #include <cmath>
 
-#include "gear_dynamics/dynamics/spectrum.hpp"
+#include "gear_dynamics/maths/spectrum.hpp"
 
 namespace gear_dynamics {
 

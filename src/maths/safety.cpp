@@ -1,4 +1,4 @@
-#include "gear_dynamics/dynamics/safety.hpp"
+#include "gear_dynamics/maths/safety.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -2,7 +2,7 @@
 // doc/nonlinear-dynamics.md §6, §7): per group of the report (mu, or study point) safety over time
 // with Wilson bands, first passage out of the safe set with its Kaplan-Meier survival curve, the
 // mean Welch PSD of delta over the realizations with a dense series, KDEs of delta(T) and
-// delta_dot(T), and the Poincare section of the phase ensemble. Here, not in `analysis`, because `dynamics` is the layer above it. No ROS.
+// delta_dot(T), and the Poincare section of the phase ensemble. The report layer writes them. No ROS.
 #pragma once
 
 #include <cstdint>
@@ -12,9 +12,10 @@
 #include <utility>
 #include <vector>
 
-#include "gear_dynamics/analysis/report.hpp"
-#include "gear_dynamics/dynamics/safety.hpp"
-#include "gear_dynamics/dynamics/spectrum.hpp"
+#include "gear_dynamics/analysis/batch_analysis.hpp"
+#include "gear_dynamics/batch/run_record.hpp"
+#include "gear_dynamics/maths/safety.hpp"
+#include "gear_dynamics/maths/spectrum.hpp"
 
 namespace gear_dynamics {
 
@@ -112,11 +113,5 @@ class SeriesDigests {
 };
 
 BatchOverTime analyse_over_time(const BatchInputs& inputs, const BatchAnalysis& analysis, const SeriesDigests& series);
-
-// Writes safety_over_time.csv, first_passage.csv, survival.csv, spectrum_band.csv,
-// spectrum_peaks.csv, spectrum_info.csv, poincare.csv and (with analysis.kde) kde.csv, in the paper's units;
-// returns the report.md section. Throws std::runtime_error if a file cannot be written.
-std::string write_over_time(const std::string& folder, const BatchInputs& inputs, const BatchAnalysis& analysis,
-                            const BatchOverTime& over_time, std::vector<std::string>& written);
 
 }  // namespace gear_dynamics

@@ -1,4 +1,4 @@
-#include "gear_dynamics/analysis/paper_reference.hpp"
+#include "gear_dynamics/report/paper_reference.hpp"
 
 #include <cmath>
 
