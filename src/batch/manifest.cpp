@@ -153,7 +153,13 @@ bool is_manifest_file(const std::string& file) { return file.rfind("manifest", 0
 
 std::string bag_file_name(const std::string& run_name) { return run_name + ".bag"; }
 
-std::string active_file_name(const std::string& run_name) { return run_name + kActiveSuffix; }
+std::string active_file_name(const std::string& run_name) { return run_name + ".bag.active"; }
+
+bool is_bag_file(const std::string& file) { return ends_with(file, ".bag"); }
+
+bool is_active_file(const std::string& file) { return ends_with(file, ".bag.active"); }
+
+bool is_temporary_file(const std::string& file) { return ends_with(file, ".tmp"); }
 
 YAML::Node manifest_config(const ModelConfig& model, const BatchSettings& settings) {
   YAML::Node n = to_yaml(model);

@@ -25,10 +25,6 @@ fs::path active_path(const std::string& folder, const std::string& name) {
   return fs::path(folder) / active_file_name(name);
 }
 
-bool ends_with(const std::string& s, const std::string& tail) {
-  return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
-}
-
 // Why the folder cannot take this shard of this batch, or "" if it can. Shards of one batch may
 // share a folder (each writes its own manifest); anything else is another batch.
 std::string refusal(const fs::path& dir, const YAML::Node& config, const BatchSettings& s, const std::string& format) {
@@ -36,7 +32,7 @@ std::string refusal(const fs::path& dir, const YAML::Node& config, const BatchSe
   for (const auto& entry : fs::directory_iterator(dir)) {
     const std::string file = entry.path().filename().string();
     if (!is_manifest_file(file)) {
-      other_files = other_files || !ends_with(file, ".tmp");  // a manifest being written
+      other_files = other_files || !is_temporary_file(file);
       continue;
     }
     manifests = true;
@@ -153,7 +149,7 @@ std::vector<RunSpec> prepare_folder(const Study& study, const BatchSettings& set
     }
     for (const auto& entry : fs::directory_iterator(dir)) {
       const std::string f = entry.path().filename().string();
-      if (ends_with(f, ".bag") || ends_with(f, kActiveSuffix) || is_manifest_file(f)) fs::remove(entry.path());
+      if (is_bag_file(f) || is_active_file(f) || is_manifest_file(f)) fs::remove(entry.path());
     }
   }
 

@@ -581,11 +581,8 @@ void skip_unlisted(BatchInputs& in, const std::vector<fs::path>& folders, const 
   for (const fs::path& folder : folders)
     for (const auto& f : fs::directory_iterator(folder)) {
       const std::string name = f.path().filename().string();
-      const auto ends = [&](const std::string& suffix) {
-        return name.size() >= suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
-      };
-      if (ends(".bag.active")) skip(in, f.path(), "unfinished (.active): the run was in flight or abandoned");
-      else if (ends(".bag") && !referenced.count(f.path())) skip(in, f.path(), "not listed in any manifest of the batch");
+      if (is_active_file(name)) skip(in, f.path(), "unfinished (.active): the run was in flight or abandoned");
+      else if (is_bag_file(name) && !referenced.count(f.path())) skip(in, f.path(), "not listed in any manifest of the batch");
     }
 }
 

@@ -56,7 +56,9 @@ std::string manifest_file_name(int shard_index, int shard_count);
 bool is_manifest_file(const std::string& file_name);  // manifest*.yaml
 std::string bag_file_name(const std::string& run_name);     // <run>.bag, a finished run
 std::string active_file_name(const std::string& run_name);  // <run>.bag.active, being written
-constexpr const char* kActiveSuffix = ".bag.active";
+bool is_bag_file(const std::string& file_name);        // *.bag
+bool is_active_file(const std::string& file_name);     // *.bag.active: in flight, or abandoned
+bool is_temporary_file(const std::string& file_name);  // *.tmp: a manifest being written
 
 // The manifest's `config`: the model (to_yaml) plus the `monte_carlo` settings that define the
 // batch's content. Two batches are the same batch if these are equal.
