@@ -1,4 +1,5 @@
 #include "gear_dynamics/batch/manifest.hpp"
+#include "gear_dynamics/batch/run_record.hpp"  // same_value
 
 #include <yaml-cpp/eventhandler.h>
 
@@ -21,8 +22,6 @@ namespace {
 bool ends_with(const std::string& s, const std::string& tail) {
   return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
 }
-
-bool same(double a, double b) { return std::abs(a - b) <= 1e-12 * std::max(1.0, std::abs(b)); }
 
 // Checks a YAML text's syntax without building yaml-cpp's tree (throws YAML::ParserException).
 class SyntaxOnly : public YAML::EventHandler {
@@ -131,7 +130,7 @@ ManifestRun read_run(const YAML::Node& r, std::size_t i, const Manifest& m, cons
   if (m.study) {
     e.point = field<std::size_t>(r, "point", at, fail);
     if (e.point >= m.points.size()) fail("runs[" + std::to_string(i) + "].point is not among the points");
-    if (!same(m.points[e.point][0], e.mu)) fail("runs[" + std::to_string(i) + "].mu differs from its point's");
+    if (!same_value(m.points[e.point][0], e.mu)) fail("runs[" + std::to_string(i) + "].mu differs from its point's");
   }
   const std::string kind_text = field<std::string>(r, "kind", at, fail);
   const auto kind = run_kind_from(kind_text);
@@ -143,6 +142,8 @@ ManifestRun read_run(const YAML::Node& r, std::size_t i, const Manifest& m, cons
 }
 
 }  // namespace
+
+bool same_value(double a, double b) { return std::abs(a - b) <= 1e-12 * std::max(1.0, std::abs(b)); }
 
 std::string manifest_file_name(int shard_index, int shard_count) {
   if (shard_count == 1) return "manifest.yaml";

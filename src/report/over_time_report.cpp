@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "gear_dynamics/analysis/report_text.hpp"
+#include "report_file.hpp"
 #include "sections.hpp"
 
 namespace gear_dynamics {
@@ -38,23 +39,6 @@ Spread spread_of(const std::vector<double>& x) {
   return s;
 }
 
-class CsvFile {
- public:
-  CsvFile(const fs::path& path, std::vector<std::string>& written, const std::string& header) : path_(path), out_(path) {
-    if (!out_) throw std::runtime_error("cannot write " + path.string());
-    written.push_back(path.string());
-    out_ << header << '\n';
-  }
-  ~CsvFile() noexcept(false) {
-    out_.close();
-    if (!out_ && std::uncaught_exceptions() == 0) throw std::runtime_error("error writing " + path_.string());
-  }
-  std::ostream& row(const std::string& key) { return out_ << key; }
-
- private:
-  fs::path path_;
-  std::ofstream out_;
-};
 
 // What the files and the section over time are written from, and the list of files written.
 struct OverTimeFiles {
@@ -87,33 +71,33 @@ struct OverTimeFiles {
 
 // safety_over_time.csv: P(both intervals) and each alone at every common recorded time.
 void OverTimeFiles::write_safety_csv() const {
-  CsvFile c(dir / "safety_over_time.csv", written,
+  ReportFile c(dir / "safety_over_time.csv", written,
             kh + ",t[s],quantity,successes,trials,estimate,wilson_low,wilson_high");
   for (std::size_t i = 0; i < o.groups.size(); ++i) {
     const SafetySeries& ss = o.groups[i].safety;
     for (std::size_t j = 0; j < ss.time.size(); ++j)
       for (const auto& [name, p] : {std::pair<const char*, const Proportion&>{"joint", ss.joint[j]},
                                     {"delta", ss.delta_only[j]}, {"delta_dot", ss.velocity_only[j]}})
-        c.row(key(i)) << ',' << general(ss.time[j]) << ',' << name << ',' << p.successes << ',' << p.trials << ','
+        c.line(key(i)) << ',' << general(ss.time[j]) << ',' << name << ',' << p.successes << ',' << p.trials << ','
                       << general(p.estimate) << ',' << general(p.low) << ',' << general(p.high) << '\n';
   }
 }
 
 // first_passage.csv, survival.csv: each realization's first passage and the Kaplan-Meier curve.
 void OverTimeFiles::write_first_passage_csv() const {
-  CsvFile fp(dir / "first_passage.csv", written, kh + ",realization,t[s],event");
-  CsvFile km(dir / "survival.csv", written, kh + ",t[s],at_risk,events,survival,low,high");
+  ReportFile fp(dir / "first_passage.csv", written, kh + ",realization,t[s],event");
+  ReportFile km(dir / "survival.csv", written, kh + ",t[s],at_risk,events,survival,low,high");
   for (std::size_t i = 0; i < o.groups.size(); ++i) {
     const GroupOverTime& grp = o.groups[i];
     if (!grp.passage) continue;
     for (std::size_t r = 0; r < grp.realizations.size(); ++r)
-      fp.row(key(i)) << ',' << grp.realizations[r] << ',' << general(grp.passage->time[r]) << ','
+      fp.line(key(i)) << ',' << grp.realizations[r] << ',' << general(grp.passage->time[r]) << ','
                      << (grp.passage->event[r] ? 1 : 0) << '\n';
     // First row: the settling time, where every realization is at risk and S = 1.
-    km.row(key(i)) << ',' << general(s.first_passage_settle) << ',' << grp.passage->time.size() << ",0,1,1,1\n";
+    km.line(key(i)) << ',' << general(s.first_passage_settle) << ',' << grp.passage->time.size() << ",0,1,1,1\n";
     const KaplanMeier& k = grp.survival;
     for (std::size_t j = 0; j < k.time.size(); ++j)
-      km.row(key(i)) << ',' << general(k.time[j]) << ',' << k.at_risk[j] << ',' << k.events[j] << ',' << general(k.survival[j])
+      km.line(key(i)) << ',' << general(k.time[j]) << ',' << k.at_risk[j] << ',' << k.events[j] << ',' << general(k.survival[j])
                      << ',' << general(k.low[j]) << ',' << general(k.high[j]) << '\n';
   }
 }
@@ -121,11 +105,11 @@ void OverTimeFiles::write_first_passage_csv() const {
 // spectrum_band.csv, spectrum_peaks.csv, spectrum_info.csv: the mean Welch PSD of delta, its lines, its settings.
 void OverTimeFiles::write_spectrum_csv() const {
   const double U2 = U * U;
-  CsvFile band(dir / "spectrum_band.csv", written,
+  ReportFile band(dir / "spectrum_band.csv", written,
                kh + ",f[Hz],mean[mm^2/Hz],mean_low[mm^2/Hz],mean_high[mm^2/Hz],run_low[mm^2/Hz],run_high[mm^2/Hz]");
-  CsvFile peaks(dir / "spectrum_peaks.csv", written,
+  ReportFile peaks(dir / "spectrum_peaks.csv", written,
                 kh + ",f[Hz],density[mm^2/Hz],harmonic,offset[Hz],is_harmonic,prominence");
-  CsvFile info(dir / "spectrum_info.csv", written,
+  ReportFile info(dir / "spectrum_info.csv", written,
                kh + ",mesh_frequency[Hz],sample_rate[Hz],resolution[Hz],enbw[Hz],segment,overlap,segments,runs,"
                     "transient[s]");
   for (std::size_t i = 0; i < o.groups.size(); ++i) {
@@ -133,12 +117,12 @@ void OverTimeFiles::write_spectrum_csv() const {
     const GroupSpectrum& sp = *o.groups[i].spectrum;
     const PsdBand& b = sp.band;
     for (std::size_t k = 0; k < b.frequency.size(); ++k)
-      band.row(key(i)) << ',' << general(b.frequency[k]) << ',' << general(b.mean[k] * U2) << ',' << general(b.mean_low[k] * U2) << ','
+      band.line(key(i)) << ',' << general(b.frequency[k]) << ',' << general(b.mean[k] * U2) << ',' << general(b.mean_low[k] * U2) << ','
                        << general(b.mean_high[k] * U2) << ',' << general(b.run_low[k] * U2) << ',' << general(b.run_high[k] * U2) << '\n';
     for (const SpectralPeak& p : sp.peaks)
-      peaks.row(key(i)) << ',' << general(p.frequency) << ',' << general(p.density * U2) << ',' << p.harmonic << ','
+      peaks.line(key(i)) << ',' << general(p.frequency) << ',' << general(p.density * U2) << ',' << p.harmonic << ','
                         << general(p.offset) << ',' << (p.is_harmonic ? 1 : 0) << ',' << general(p.prominence) << '\n';
-    info.row(key(i)) << ',' << general(sp.mesh_frequency) << ',' << general(sp.first.sample_rate) << ',' << general(sp.first.resolution)
+    info.line(key(i)) << ',' << general(sp.mesh_frequency) << ',' << general(sp.first.sample_rate) << ',' << general(sp.first.resolution)
                      << ',' << general(sp.first.enbw) << ',' << sp.first.segment << ',' << general(sp.first.overlap) << ','
                      << sp.first.segments << ',' << b.runs << ',' << general(sp.transient) << '\n';
   }
@@ -146,12 +130,12 @@ void OverTimeFiles::write_spectrum_csv() const {
 
 // poincare.csv: the phase ensemble's Poincare points.
 void OverTimeFiles::write_poincare_csv() const {
-  CsvFile c(dir / "poincare.csv", written, kh + ",phase,t[s],delta[mm],delta_dot[mm/s]");
+  ReportFile c(dir / "poincare.csv", written, kh + ",phase,t[s],delta[mm],delta_dot[mm/s]");
   for (std::size_t i = 0; i < o.groups.size(); ++i) {
     if (!o.groups[i].section) continue;
     const GroupSection& sec = *o.groups[i].section;
     for (std::size_t k = 0; k < sec.time.size(); ++k)
-      c.row(key(i)) << ',' << sec.phase[k] << ',' << general(sec.time[k]) << ',' << general(sec.delta[k] * U) << ','
+      c.line(key(i)) << ',' << sec.phase[k] << ',' << general(sec.time[k]) << ',' << general(sec.delta[k] * U) << ','
                     << general(sec.delta_dot[k] * U) << '\n';
   }
 }
@@ -159,14 +143,14 @@ void OverTimeFiles::write_poincare_csv() const {
 // kde.csv: the kernel density estimates of delta(T) and delta_dot(T), if analysis.kde.
 void OverTimeFiles::write_kde_csv() const {
   if (!s.kde) return;
-  CsvFile c(dir / "kde.csv", written, kh + ",quantity,unit,bandwidth,x,density");
+  ReportFile c(dir / "kde.csv", written, kh + ",quantity,unit,bandwidth,x,density");
   for (std::size_t i = 0; i < o.groups.size(); ++i)
     for (const auto& [name, unit, kde] : {std::tuple<const char*, const char*, const std::optional<Kde>&>{
                                               "delta_T", "mm", o.groups[i].kde_delta},
                                           {"delta_dot_T", "mm/s", o.groups[i].kde_delta_dot}})
       if (kde)
         for (std::size_t k = 0; k < kde->grid.size(); ++k)
-          c.row(key(i)) << ',' << name << ',' << unit << ',' << general(kde->bandwidth * U) << ',' << general(kde->grid[k] * U)
+          c.line(key(i)) << ',' << name << ',' << unit << ',' << general(kde->bandwidth * U) << ',' << general(kde->grid[k] * U)
                         << ',' << general(kde->density[k] / U) << '\n';
 }
 

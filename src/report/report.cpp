@@ -9,6 +9,7 @@
 
 #include "gear_dynamics/analysis/report_text.hpp"
 #include "gear_dynamics/report/paper_reference.hpp"
+#include "report_file.hpp"
 #include "sections.hpp"
 
 namespace gear_dynamics {
@@ -42,43 +43,16 @@ std::string inside(double paper, const Proportion& p) {
   return paper >= p.low && paper <= p.high ? "yes" : "no";
 }
 
-class Csv {
- public:
-  Csv(const fs::path& path, std::vector<std::string>& written, const std::string& header) : path_(path), out_(path) {
-    if (!out_) throw std::runtime_error("cannot write " + path.string());
-    written.push_back(path.string());
-    out_ << header << '\n';
-  }
-  ~Csv() noexcept(false) {
-    out_.close();
-    if (!out_ && std::uncaught_exceptions() == 0) throw std::runtime_error("error writing " + path_.string());
-  }
-  template <class... T>
-  void row(const T&... fields) {
-    std::size_t i = 0;
-    ((out_ << (i++ ? "," : "") << field(fields)), ...);
-    out_ << '\n';
-  }
-
- private:
-  static std::string field(double x) { return general(x); }
-  static std::string field(const std::string& s) { return s; }
-  static std::string field(const char* s) { return s; }
-  template <class I, class = std::enable_if_t<std::is_integral_v<I>>>
-  static std::string field(I x) { return std::to_string(x); }
-  fs::path path_;
-  std::ofstream out_;
-};
 
 const char* kBoxHeader = "n,min,q1,median,q3,max,median_low,median_high,median_coverage";
 
-void box_row(Csv& csv, const std::string& mu, const char* group, const char* quantity, const char* unit, const BoxStats& b,
+void box_row(ReportFile& csv, const std::string& mu, const char* group, const char* quantity, const char* unit, const BoxStats& b,
              double scale) {
   csv.row(mu, group, quantity, unit, b.n, b.min * scale, b.q1 * scale, b.median * scale, b.q3 * scale,
           b.max * scale, b.median_low * scale, b.median_high * scale, b.median_coverage);
 }
 
-void probability_row(Csv& csv, const std::string& mu, const char* quantity, const std::string& reference, const Proportion& p,
+void probability_row(ReportFile& csv, const std::string& mu, const char* quantity, const std::string& reference, const Proportion& p,
                      double paper) {
   csv.row(mu, quantity, reference, p.successes, p.trials, p.estimate, p.low, p.high, paper, inside(paper, p));
 }
@@ -131,7 +105,7 @@ struct ReportFiles {
 
 // batch.csv: the batch's settings and how many runs it used.
 void ReportFiles::write_batch_csv() const {
-  Csv c(dir / "batch.csv", written, "key,value,unit");
+  ReportFile c(dir / "batch.csv", written, "key,value,unit");
   c.row("duration", in.config.run.duration, "s");
   c.row("time_step", in.config.run.time_step, "s");
   c.row("window", in.config.run.window, "s");
@@ -145,7 +119,7 @@ void ReportFiles::write_batch_csv() const {
 
 // runs.csv: one row per run used.
 void ReportFiles::write_runs_csv() const {
-  Csv c(dir / "runs.csv", written,
+  ReportFile c(dir / "runs.csv", written,
         "name,kind,mu,index,d[mm*s^-1/2],t_ss[s],t_ss_fine[s],reached_steady_state,delta_T[mm],"
         "delta_dot_T[mm/s],phi_T[mm/s^2]");
   for (const RunRecord& r : in.runs)
@@ -156,7 +130,7 @@ void ReportFiles::write_runs_csv() const {
 
 // box_stats.csv: the box statistics of every quantity per group.
 void ReportFiles::write_box_stats_csv() const {
-  Csv c(dir / "box_stats.csv", written, kh + ",group,quantity,unit," + kBoxHeader);
+  ReportFile c(dir / "box_stats.csv", written, kh + ",group,quantity,unit," + kBoxHeader);
   for (const MuAnalysis& m : a.mu) {
     box_row(c, key(m), "stochastic", "d", "mm*s^-1/2", m.center_distance, U);
     box_row(c, key(m), "stochastic", "t_ss", "s", m.steady_state_time, 1);
@@ -172,7 +146,7 @@ void ReportFiles::write_box_stats_csv() const {
 
 // probabilities.csv: the Wilson intervals, with the paper's values where it has them.
 void ReportFiles::write_probabilities_csv() const {
-  Csv c(dir / "probabilities.csv", written,
+  ReportFile c(dir / "probabilities.csv", written,
         kh + ",quantity,reference,successes,trials,estimate,wilson_low,wilson_high,paper,paper_in_interval");
   for (const MuAnalysis& m : a.mu) {
     const PaperReference* p = a.keys.empty() ? paper_at(m.mu) : nullptr;  // a study's points are not the paper's
@@ -192,7 +166,7 @@ void ReportFiles::write_probabilities_csv() const {
 
 // table3.csv: S1, S2, S3 beside the paper's Table 3.
 void ReportFiles::write_table3_csv() const {
-  Csv c(dir / "table3.csv", written,
+  ReportFile c(dir / "table3.csv", written,
         kh + ",s1_delta_T[mm],paper_delta_T[mm],s1_delta_dot_T[mm/s],paper_delta_dot_T[mm/s],s1_d[mm*s^-1/2],"
         "s2_d[mm*s^-1/2],s3_d[mm*s^-1/2],s1_t_ss[s]");
   for (const MuAnalysis& m : a.mu) {
@@ -206,11 +180,11 @@ void ReportFiles::write_table3_csv() const {
 
 // pdf_delta.csv, pdf_delta_dot.csv, joint_pdf.csv, pdf_outside.csv: the histograms at T and over time.
 void ReportFiles::write_pdfs_csv() const {
-  Csv cd(dir / "pdf_delta.csv", written, kh + ",lo[mm],hi[mm],count,density[1/mm]");
-  Csv cv(dir / "pdf_delta_dot.csv", written, kh + ",lo[mm/s],hi[mm/s],count,density[s/mm]");
-  Csv cj(dir / "joint_pdf.csv", written,
+  ReportFile cd(dir / "pdf_delta.csv", written, kh + ",lo[mm],hi[mm],count,density[1/mm]");
+  ReportFile cv(dir / "pdf_delta_dot.csv", written, kh + ",lo[mm/s],hi[mm/s],count,density[s/mm]");
+  ReportFile cj(dir / "joint_pdf.csv", written,
          kh + ",t[s],delta_lo[mm],delta_hi[mm],delta_dot_lo[mm/s],delta_dot_hi[mm/s],count,density[s/mm^2]");
-  Csv co(dir / "pdf_outside.csv", written, kh + ",quantity,t[s],outside,total,fraction");
+  ReportFile co(dir / "pdf_outside.csv", written, kh + ",quantity,t[s],outside,total,fraction");
   for (const MuAnalysis& m : a.mu) {
     for (std::size_t i = 0; i < m.delta_pdf.counts.size(); ++i)
       cd.row(key(m), m.delta_pdf.edges[i] * U, m.delta_pdf.edges[i + 1] * U, m.delta_pdf.counts[i],
@@ -235,7 +209,7 @@ void ReportFiles::write_pdfs_csv() const {
 
 // rank_tests.csv: Kruskal-Wallis and Friedman across the groups.
 void ReportFiles::write_rank_tests_csv() const {
-  Csv c(dir / "rank_tests.csv", written, "test,statistic,df,n,p_value,valid");
+  ReportFile c(dir / "rank_tests.csv", written, "test,statistic,df,n,p_value,valid");
   c.row("kruskal_wallis", a.kruskal_wallis.statistic, a.kruskal_wallis.df, a.kruskal_wallis.n,
         a.kruskal_wallis.p_value, a.kruskal_wallis.valid ? 1 : 0);
   c.row("friedman", a.friedman.statistic, a.friedman.df, a.friedman.n, a.friedman.p_value, a.friedman.valid ? 1 : 0);
@@ -243,7 +217,7 @@ void ReportFiles::write_rank_tests_csv() const {
 
 // inputs.csv: the bags skipped and the runs missing.
 void ReportFiles::write_inputs_csv() const {
-  Csv c(dir / "inputs.csv", written, "item,status,reason");
+  ReportFile c(dir / "inputs.csv", written, "item,status,reason");
   for (const SkippedFile& f : in.skipped) c.row(quoted(f.file), "skipped", quoted(f.reason));
   for (const std::string& m : in.missing) c.row(quoted(m), "missing", "");
 }
@@ -403,10 +377,8 @@ void ReportFiles::md_left_out(std::ostream& r) const {
 }
 
 void write_report_md(const ReportFiles& R, const std::string& sections) {
-  const fs::path md = R.dir / "report.md";
-  std::ofstream r(md);
-  if (!r) throw std::runtime_error("cannot write " + md.string());
-  R.written.push_back(md.string());
+  ReportFile file(R.dir / "report.md", R.written);
+  std::ostream& r = file.out();
   R.md_heading(r);
   R.md_center_distance(r);
   R.md_exceeds(r);
@@ -415,11 +387,9 @@ void write_report_md(const ReportFiles& R, const std::string& sections) {
   R.md_table4(r);
   R.md_steady_state(r);
   R.md_pdfs(r);
-  r << sections;  // from the layers above: the analyses over time
+  r << sections;  // the analyses over time
   R.md_figures(r);
   R.md_left_out(r);
-  r.close();
-  if (!r) throw std::runtime_error("error writing " + md.string());
 }
 
 }  // namespace

@@ -28,8 +28,7 @@ std::string FigureSeries::part(const std::string& run) const {
 }
 
 bool FigureSeries::wants(RunKind kind, double mu, std::uint32_t index) const {
-  const bool at_mu = std::abs(mu - mu_) <= 1e-12 * std::max(1.0, std::abs(mu_));
-  return at_mu && (kind == RunKind::S1 || (kind == RunKind::Stochastic && index <= 1));
+  return same_value(mu, mu_) && (kind == RunKind::S1 || (kind == RunKind::Stochastic && index <= 1));
 }
 
 void FigureSeries::add(const RunRecord& run, const RunSeries& series) {

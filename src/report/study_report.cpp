@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "gear_dynamics/analysis/report_text.hpp"
+#include "report_file.hpp"
 #include "sections.hpp"
 
 namespace gear_dynamics {
@@ -44,7 +45,7 @@ std::string fixed_text(const StudyAnalysis& s, const AxisSlice& l, const char* s
   return t;
 }
 
-void proportion_fields(std::ofstream& o, const Proportion& p) {
+void proportion_fields(std::ostream& o, const Proportion& p) {
   o << ',' << p.successes << ',' << p.trials << ',' << general(p.estimate) << ',' << general(p.low) << ',' << general(p.high);
 }
 
@@ -52,22 +53,10 @@ void proportion_fields(std::ofstream& o, const Proportion& p) {
 
 namespace {
 
-std::ofstream open_file(const fs::path& dir, const std::string& name, std::vector<std::string>& written) {
-  const fs::path path = dir / name;
-  std::ofstream o(path);
-  if (!o) throw std::runtime_error("cannot write " + path.string());
-  written.push_back(path.string());
-  return o;
-}
-
-void close_file(std::ofstream& o, const fs::path& dir, const std::string& name) {
-  o.close();
-  if (!o) throw std::runtime_error("error writing " + (dir / name).string());
-}
-
 // points.csv: one row per point, every statistic.
 void write_points_csv(const fs::path& dir, const StudyAnalysis& st, std::vector<std::string>& written) {
-  std::ofstream o = open_file(dir, "points.csv", written);
+  ReportFile file(dir / "points.csv", written);
+  std::ostream& o = file.out();
   o << "point";
   for (const SweepAxis& a : st.axes) o << ',' << column_name(a.key);
   o << ",R,d_min[mm*s^-1/2],d_q1,d_median,d_median_low,d_median_high,d_q3,d_max,phase_n,phase_d_median[mm*s^-1/2],"
@@ -92,12 +81,12 @@ void write_points_csv(const fs::path& dir, const StudyAnalysis& st, std::vector<
       << ',' << general(m.final_delta.median * U) << ',' << general(m.final_delta_dot.median * U) << ','
       << general(p.final_phi_mean * U) << ',' << general(p.final_phi_sd * U) << '\n';
   }
-  close_file(o, dir, "points.csv");
 }
 
 // axis_tests.csv: one row per line of the grid.
 void write_axis_tests_csv(const fs::path& dir, const StudyAnalysis& st, std::vector<std::string>& written) {
-  std::ofstream o = open_file(dir, "axis_tests.csv", written);
+  ReportFile file(dir / "axis_tests.csv", written);
+  std::ostream& o = file.out();
   o << "axis,fixed,points,kruskal_wallis_H,kruskal_wallis_df,kruskal_wallis_n,kruskal_wallis_p,friedman_chi2,"
        "friedman_df,friedman_blocks,friedman_p,d_median_first[mm*s^-1/2],d_median_last[mm*s^-1/2]\n";
   for (const AxisSlice& l : st.slices) {
@@ -110,7 +99,6 @@ void write_axis_tests_csv(const fs::path& dir, const StudyAnalysis& st, std::vec
       << general(f.p_value) << ',' << general(st.points[l.points.front()].stats.center_distance.median * U) << ','
       << general(st.points[l.points.back()].stats.center_distance.median * U) << '\n';
   }
-  close_file(o, dir, "axis_tests.csv");
 }
 
 std::string interval_text(const Interval& i, int decimals) {
@@ -208,12 +196,12 @@ void write_study_files(const std::string& folder, const BatchInputs& in, const S
   write_points_csv(dir, st, written);
   write_axis_tests_csv(dir, st, written);
   if (!st.swept()) return;
-  std::ofstream r = open_file(dir, "report.md", written);
+  ReportFile file(dir / "report.md", written);
+  std::ostream& r = file.out();
   const std::string pct = std::to_string(static_cast<int>(std::lround(100 * s.confidence))) + " %";
   write_study_head(r, in, st, s, pct);
   write_study_axes(r, st, s, pct);
   write_study_tail(r, in, st, sections);
-  close_file(r, dir, "report.md");
 }
 
 }  // namespace gear_dynamics

@@ -72,8 +72,6 @@ std::string first_difference(const std::string& a, const std::string& b) {
   }
 }
 
-bool same(double a, double b) { return std::abs(a - b) <= 1e-12 * std::max(1.0, std::abs(b)); }
-
 FolderManifest parse_manifest(const fs::path& path) {
   FolderManifest m;
   try {
@@ -422,7 +420,7 @@ RunRecord check_run(BagRead& read, const ManifestRun& e, const FolderManifest& m
 
   // Is it this run of this batch?
   const ModelConfig& c = manifest.model;
-  require(info->kind == to_string(e.kind) && info->realization == e.realization && same(info->mu, e.mu),
+  require(info->kind == to_string(e.kind) && info->realization == e.realization && same_value(info->mu, e.mu),
           "run_info is run (" + info->kind + ", realization " + std::to_string(info->realization) + ", mu " +
               std::to_string(info->mu) + "), the manifest lists (" + to_string(e.kind) + ", " +
               std::to_string(e.realization) + ", " + std::to_string(e.mu) + ") (a bag of another batch)");
@@ -436,10 +434,10 @@ RunRecord check_run(BagRead& read, const ManifestRun& e, const FolderManifest& m
   if (manifest.study)
     require(parsed.point == e.point, "run_info study.point differs from the manifest's point " +
                                          std::to_string(e.point) + " (a bag of another batch)");
-  require(same(info->time_step, c.run.time_step) && same(info->duration, c.run.duration),
+  require(same_value(info->time_step, c.run.time_step) && same_value(info->duration, c.run.duration),
           "run_info time_step/duration differ from the manifest's (a bag of another batch)");
   require(summary->run_name == e.name && summary->kind == to_string(e.kind) && summary->realization == e.realization &&
-              same(summary->mu, e.mu),
+              same_value(summary->mu, e.mu),
           "summary is of run '" + summary->run_name + "', not '" + e.name + "'");
   require(summary->snapshot_delta.size() == summary->snapshot_times.size() &&
               summary->snapshot_delta_dot.size() == summary->snapshot_times.size(),
@@ -528,7 +526,7 @@ void list_runs(const std::vector<fs::path>& folders, Listing& listing) {
     for (const ManifestRun& e : m.runs) {
       const auto [it, inserted] = listed.emplace(e.name, std::make_pair(e, &m));
       const ManifestRun& had = it->second.first;
-      if (!inserted && (had.kind != e.kind || had.realization != e.realization || !same(had.mu, e.mu) || had.point != e.point))
+      if (!inserted && (had.kind != e.kind || had.realization != e.realization || !same_value(had.mu, e.mu) || had.point != e.point))
         throw BatchReadError("run " + e.name + " is listed differently in " + it->second.second->path.string() +
                              " and " + m.path.string());
     }

@@ -116,9 +116,9 @@ TEST(ToothStiffness, FoundationBySainsotsFormula) {
   EXPECT_NEAR(gd::ToothPairStiffness(g).compliance(g.x_p, 0, 0).foundation[0], expected, 1e-12 * expected);
 }
 
-// The levels: within 10 % of the specification's potential-energy cross-check (1.21e8 and 2.07e8
-// N/m, ../shared/MODEL.md §3) and of ISO's square wave; without the foundation term 2 to 3 times
-// stiffer (the known overestimate, about 2.4 in the specification).
+// The levels: within 10 % of the model specification's potential-energy cross-check (1.21e8 and
+// 2.07e8 N/m, its §3; doc/model.md §3) and of ISO's square wave; without the foundation term 2 to 3
+// times stiffer (the known overestimate, about 2.4 in the specification).
 TEST(ToothStiffness, LevelsAgainstTheCrossCheckAndIso) {
   const gd::GearPair g = gd::derive(potential_energy());
   const auto [single, both] = levels(g, gd::ToothPairStiffness(g));

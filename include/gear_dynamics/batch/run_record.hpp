@@ -33,6 +33,10 @@ struct RunRecord {
   std::vector<double> section_times, section_delta, section_delta_dot;
 };
 
+// Whether two values written by a batch are the same (mu, time step, duration): equal to 1e-12
+// relative, the text round trip of the manifest and the bags' messages set aside.
+bool same_value(double a, double b);
+
 // A run's /gear/state series, SI units: [s], [m], [m/s], [m/s^2].
 struct RunSeries {
   std::vector<double> t, delta, delta_dot, phi;
