@@ -59,9 +59,9 @@ bool AggregatorNode::run() {
     const BatchAnalysis analysis = analyse_batch(inputs, settings_.analysis, study);
     const BatchOverTime over_time = analyse_over_time(inputs, analysis, digests);
     for (const std::string& note : over_time.notes) ROS_WARN("gear_aggregator: %s", note.c_str());
-    figure_series.write(inputs.runs);
-    const std::vector<std::string> report = write_report(report_folder_, inputs, analysis, &study, &over_time);
-    ROS_INFO("gear_aggregator: %zu files written", report.size() + 1);
+    std::vector<std::string> written = write_report(report_folder_, inputs, analysis, &study, &over_time);
+    written.push_back(figure_series.write(inputs.runs));
+    ROS_INFO("gear_aggregator: %zu files written", written.size());
     plot(true);
     publisher_.publish(make_report_message(inputs, analysis, report_folder_));
   } catch (const std::exception& ex) {
