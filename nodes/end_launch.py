@@ -9,11 +9,18 @@ roslaunch's own 'process has died [exit code N]' line. It acts only when its par
 roslaunch (under rostest, which runs the launch in-process, it does nothing)."""
 import os
 import signal
-import time
-import xmlrpc.client
 
-import rosgraph
-import rospy
+# A signal ends this node at once, whenever it comes: the node holds nothing to clean up, and
+# rospy's handler, run while init_node holds rospy's locks, deadlocks (roslaunch then waits 15 s
+# and escalates to SIGKILL).
+signal.signal(signal.SIGINT, signal.SIG_DFL)
+signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+import time  # noqa: E402
+import xmlrpc.client  # noqa: E402
+
+import rosgraph  # noqa: E402
+import rospy  # noqa: E402
 
 
 def parent_is_roslaunch():
@@ -47,7 +54,7 @@ def process_prefix(name):
 
 
 def main():
-    rospy.init_node('end_launch')
+    rospy.init_node('end_launch', disable_signals=True)
     watch = [process_prefix(n) for n in rospy.get_param('~watch', [])]
     if not watch or not parent_is_roslaunch():
         rospy.loginfo('end_launch: not under roslaunch or nothing to watch; idle')
@@ -64,10 +71,7 @@ def main():
         ended = [p for p, _ in dead if any(p.startswith(w) for w in watch)]
         if not alive and len(ended) >= len(watch):
             rospy.loginfo('end_launch: %s ended; ending the launch', ', '.join(ended))
-            # roslaunch answers with SIGINT to every node, this one included: leave quietly then.
-            signal.signal(signal.SIGINT, lambda *_: os._exit(0))
-            signal.signal(signal.SIGTERM, lambda *_: os._exit(0))
-            os.kill(os.getppid(), signal.SIGINT)
+            os.kill(os.getppid(), signal.SIGINT)  # roslaunch answers with SIGINT to this node too
             while True:
                 time.sleep(1.0)
 

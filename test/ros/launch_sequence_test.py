@@ -9,6 +9,8 @@ each launch does what its own arguments say, whatever the launch before it set.
   roslaunch entries the master keeps in /roslaunch/uris.
 - aggregator.launch, then plot:=false: figures only in the first report folder; the nodes' log
   lines keep their UTF-8 ("Poincaré", not "Poincar??").
+- end_launch ends at once on Ctrl-C whenever it comes, also during its start-up (rospy's own
+  handler, run while init_node holds rospy's locks, deadlocked there and roslaunch waited 15 s).
 """
 import glob
 import os
@@ -17,6 +19,7 @@ import signal
 import subprocess
 import sys
 import tempfile
+import time
 import unittest
 
 import rosgraph
@@ -158,6 +161,25 @@ class LaunchSequence(unittest.TestCase):
             figures.append(glob.glob(os.path.join(report, '*.png')))
         self.assertGreater(len(figures[0]), 0)
         self.assertEqual(figures[1], [])
+
+    def test_end_launch_ends_at_once_on_a_signal(self):
+        program = os.path.join(PKG, 'nodes', 'end_launch.py')
+        for delay in (0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.7, 1.0, 2.0):  # start-up takes about 0.4 s
+            process = subprocess.Popen([program, '__name:=end_launch_signal_test'], stdout=subprocess.DEVNULL,
+                                       stderr=subprocess.DEVNULL)
+            time.sleep(delay)
+            if delay >= 2.0:  # up and idle: the signals keep their default action, no handler
+                with open('/proc/%d/status' % process.pid) as f:
+                    caught = int(next(l for l in f if l.startswith('SigCgt:')).split()[1], 16)
+                self.assertFalse(caught & (1 << (signal.SIGINT - 1) | 1 << (signal.SIGTERM - 1)),
+                                 'end_launch handles SIGINT or SIGTERM itself (SigCgt %x)' % caught)
+            process.send_signal(signal.SIGINT)
+            try:
+                process.wait(timeout=3.0)
+            except subprocess.TimeoutExpired:
+                process.kill()
+                process.wait()
+                self.fail('end_launch did not end within 3 s of a SIGINT sent %.1f s after its start' % delay)
 
 
 if __name__ == '__main__':
