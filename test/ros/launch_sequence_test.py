@@ -167,19 +167,22 @@ class LaunchSequence(unittest.TestCase):
         for delay in (0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.7, 1.0, 2.0):  # start-up takes about 0.4 s
             process = subprocess.Popen([program, '__name:=end_launch_signal_test'], stdout=subprocess.DEVNULL,
                                        stderr=subprocess.DEVNULL)
-            time.sleep(delay)
-            if delay >= 2.0:  # up and idle: the signals keep their default action, no handler
-                with open('/proc/%d/status' % process.pid) as f:
-                    caught = int(next(l for l in f if l.startswith('SigCgt:')).split()[1], 16)
-                self.assertFalse(caught & (1 << (signal.SIGINT - 1) | 1 << (signal.SIGTERM - 1)),
-                                 'end_launch handles SIGINT or SIGTERM itself (SigCgt %x)' % caught)
-            process.send_signal(signal.SIGINT)
             try:
-                process.wait(timeout=3.0)
-            except subprocess.TimeoutExpired:
-                process.kill()
-                process.wait()
-                self.fail('end_launch did not end within 3 s of a SIGINT sent %.1f s after its start' % delay)
+                time.sleep(delay)
+                if delay >= 2.0:  # up and idle: the signals keep their default action, no handler
+                    with open('/proc/%d/status' % process.pid) as f:
+                        caught = int(next(l for l in f if l.startswith('SigCgt:')).split()[1], 16)
+                    self.assertFalse(caught & (1 << (signal.SIGINT - 1) | 1 << (signal.SIGTERM - 1)),
+                                     'end_launch handles SIGINT or SIGTERM itself (SigCgt %x)' % caught)
+                process.send_signal(signal.SIGINT)
+                try:
+                    process.wait(timeout=3.0)
+                except subprocess.TimeoutExpired:
+                    self.fail('end_launch did not end within 3 s of a SIGINT sent %.1f s after its start' % delay)
+            finally:
+                if process.poll() is None:
+                    process.kill()
+                    process.wait()
 
 
 if __name__ == '__main__':
