@@ -4,7 +4,6 @@
 #include <yaml-cpp/eventhandler.h>
 
 #include <algorithm>
-#include <cmath>
 #include <filesystem>
 #include <functional>
 #include <fstream>
@@ -142,8 +141,6 @@ ManifestRun read_run(const YAML::Node& r, std::size_t i, const Manifest& m, cons
 }
 
 }  // namespace
-
-bool same_value(double a, double b) { return std::abs(a - b) <= 1e-12 * std::max(1.0, std::abs(b)); }
 
 std::string manifest_file_name(int shard_index, int shard_count) {
   if (shard_count == 1) return "manifest.yaml";

@@ -39,7 +39,6 @@ Spread spread_of(const std::vector<double>& x) {
   return s;
 }
 
-
 // What the files and the section over time are written from, and the list of files written.
 struct OverTimeFiles {
   fs::path dir;
@@ -72,14 +71,14 @@ struct OverTimeFiles {
 // safety_over_time.csv: P(both intervals) and each alone at every common recorded time.
 void OverTimeFiles::write_safety_csv() const {
   ReportFile c(dir / "safety_over_time.csv", written,
-            kh + ",t[s],quantity,successes,trials,estimate,wilson_low,wilson_high");
+               kh + ",t[s],quantity,successes,trials,estimate,wilson_low,wilson_high");
   for (std::size_t i = 0; i < o.groups.size(); ++i) {
     const SafetySeries& ss = o.groups[i].safety;
     for (std::size_t j = 0; j < ss.time.size(); ++j)
       for (const auto& [name, p] : {std::pair<const char*, const Proportion&>{"joint", ss.joint[j]},
                                     {"delta", ss.delta_only[j]}, {"delta_dot", ss.velocity_only[j]}})
         c.line(key(i)) << ',' << general(ss.time[j]) << ',' << name << ',' << p.successes << ',' << p.trials << ','
-                      << general(p.estimate) << ',' << general(p.low) << ',' << general(p.high) << '\n';
+                       << general(p.estimate) << ',' << general(p.low) << ',' << general(p.high) << '\n';
   }
 }
 
@@ -92,13 +91,13 @@ void OverTimeFiles::write_first_passage_csv() const {
     if (!grp.passage) continue;
     for (std::size_t r = 0; r < grp.realizations.size(); ++r)
       fp.line(key(i)) << ',' << grp.realizations[r] << ',' << general(grp.passage->time[r]) << ','
-                     << (grp.passage->event[r] ? 1 : 0) << '\n';
+                      << (grp.passage->event[r] ? 1 : 0) << '\n';
     // First row: the settling time, where every realization is at risk and S = 1.
     km.line(key(i)) << ',' << general(s.first_passage_settle) << ',' << grp.passage->time.size() << ",0,1,1,1\n";
     const KaplanMeier& k = grp.survival;
     for (std::size_t j = 0; j < k.time.size(); ++j)
       km.line(key(i)) << ',' << general(k.time[j]) << ',' << k.at_risk[j] << ',' << k.events[j] << ',' << general(k.survival[j])
-                     << ',' << general(k.low[j]) << ',' << general(k.high[j]) << '\n';
+                      << ',' << general(k.low[j]) << ',' << general(k.high[j]) << '\n';
   }
 }
 
@@ -106,25 +105,25 @@ void OverTimeFiles::write_first_passage_csv() const {
 void OverTimeFiles::write_spectrum_csv() const {
   const double U2 = U * U;
   ReportFile band(dir / "spectrum_band.csv", written,
-               kh + ",f[Hz],mean[mm^2/Hz],mean_low[mm^2/Hz],mean_high[mm^2/Hz],run_low[mm^2/Hz],run_high[mm^2/Hz]");
+                  kh + ",f[Hz],mean[mm^2/Hz],mean_low[mm^2/Hz],mean_high[mm^2/Hz],run_low[mm^2/Hz],run_high[mm^2/Hz]");
   ReportFile peaks(dir / "spectrum_peaks.csv", written,
-                kh + ",f[Hz],density[mm^2/Hz],harmonic,offset[Hz],is_harmonic,prominence");
+                   kh + ",f[Hz],density[mm^2/Hz],harmonic,offset[Hz],is_harmonic,prominence");
   ReportFile info(dir / "spectrum_info.csv", written,
-               kh + ",mesh_frequency[Hz],sample_rate[Hz],resolution[Hz],enbw[Hz],segment,overlap,segments,runs,"
-                    "transient[s]");
+                  kh + ",mesh_frequency[Hz],sample_rate[Hz],resolution[Hz],enbw[Hz],segment,overlap,segments,runs,"
+                       "transient[s]");
   for (std::size_t i = 0; i < o.groups.size(); ++i) {
     if (!o.groups[i].spectrum) continue;
     const GroupSpectrum& sp = *o.groups[i].spectrum;
     const PsdBand& b = sp.band;
     for (std::size_t k = 0; k < b.frequency.size(); ++k)
       band.line(key(i)) << ',' << general(b.frequency[k]) << ',' << general(b.mean[k] * U2) << ',' << general(b.mean_low[k] * U2) << ','
-                       << general(b.mean_high[k] * U2) << ',' << general(b.run_low[k] * U2) << ',' << general(b.run_high[k] * U2) << '\n';
+                        << general(b.mean_high[k] * U2) << ',' << general(b.run_low[k] * U2) << ',' << general(b.run_high[k] * U2) << '\n';
     for (const SpectralPeak& p : sp.peaks)
       peaks.line(key(i)) << ',' << general(p.frequency) << ',' << general(p.density * U2) << ',' << p.harmonic << ','
-                        << general(p.offset) << ',' << (p.is_harmonic ? 1 : 0) << ',' << general(p.prominence) << '\n';
+                         << general(p.offset) << ',' << (p.is_harmonic ? 1 : 0) << ',' << general(p.prominence) << '\n';
     info.line(key(i)) << ',' << general(sp.mesh_frequency) << ',' << general(sp.first.sample_rate) << ',' << general(sp.first.resolution)
-                     << ',' << general(sp.first.enbw) << ',' << sp.first.segment << ',' << general(sp.first.overlap) << ','
-                     << sp.first.segments << ',' << b.runs << ',' << general(sp.transient) << '\n';
+                      << ',' << general(sp.first.enbw) << ',' << sp.first.segment << ',' << general(sp.first.overlap) << ','
+                      << sp.first.segments << ',' << b.runs << ',' << general(sp.transient) << '\n';
   }
 }
 
@@ -136,7 +135,7 @@ void OverTimeFiles::write_poincare_csv() const {
     const GroupSection& sec = *o.groups[i].section;
     for (std::size_t k = 0; k < sec.time.size(); ++k)
       c.line(key(i)) << ',' << sec.phase[k] << ',' << general(sec.time[k]) << ',' << general(sec.delta[k] * U) << ','
-                    << general(sec.delta_dot[k] * U) << '\n';
+                     << general(sec.delta_dot[k] * U) << '\n';
   }
 }
 
@@ -151,7 +150,7 @@ void OverTimeFiles::write_kde_csv() const {
       if (kde)
         for (std::size_t k = 0; k < kde->grid.size(); ++k)
           c.line(key(i)) << ',' << name << ',' << unit << ',' << general(kde->bandwidth * U) << ',' << general(kde->grid[k] * U)
-                        << ',' << general(kde->density[k] / U) << '\n';
+                         << ',' << general(kde->density[k] / U) << '\n';
 }
 
 // report.md: Safety over time: P(both) at the snapshot times.

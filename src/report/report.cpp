@@ -43,7 +43,6 @@ std::string inside(double paper, const Proportion& p) {
   return paper >= p.low && paper <= p.high ? "yes" : "no";
 }
 
-
 const char* kBoxHeader = "n,min,q1,median,q3,max,median_low,median_high,median_coverage";
 
 void box_row(ReportFile& csv, const std::string& mu, const char* group, const char* quantity, const char* unit, const BoxStats& b,
@@ -120,8 +119,8 @@ void ReportFiles::write_batch_csv() const {
 // runs.csv: one row per run used.
 void ReportFiles::write_runs_csv() const {
   ReportFile c(dir / "runs.csv", written,
-        "name,kind,mu,index,d[mm*s^-1/2],t_ss[s],t_ss_fine[s],reached_steady_state,delta_T[mm],"
-        "delta_dot_T[mm/s],phi_T[mm/s^2]");
+               "name,kind,mu,index,d[mm*s^-1/2],t_ss[s],t_ss_fine[s],reached_steady_state,delta_T[mm],"
+               "delta_dot_T[mm/s],phi_T[mm/s^2]");
   for (const RunRecord& r : in.runs)
     c.row(r.name, to_string(r.kind), r.mu, r.index, r.center_distance * U, r.steady_state_time,
           r.steady_state_time_fine, r.reached_steady_state ? 1 : 0, r.final_delta * U, r.final_delta_dot * U,
@@ -147,7 +146,7 @@ void ReportFiles::write_box_stats_csv() const {
 // probabilities.csv: the Wilson intervals, with the paper's values where it has them.
 void ReportFiles::write_probabilities_csv() const {
   ReportFile c(dir / "probabilities.csv", written,
-        kh + ",quantity,reference,successes,trials,estimate,wilson_low,wilson_high,paper,paper_in_interval");
+               kh + ",quantity,reference,successes,trials,estimate,wilson_low,wilson_high,paper,paper_in_interval");
   for (const MuAnalysis& m : a.mu) {
     const PaperReference* p = a.keys.empty() ? paper_at(m.mu) : nullptr;  // a study's points are not the paper's
     const double nan = std::nan("");
@@ -167,8 +166,8 @@ void ReportFiles::write_probabilities_csv() const {
 // table3.csv: S1, S2, S3 beside the paper's Table 3.
 void ReportFiles::write_table3_csv() const {
   ReportFile c(dir / "table3.csv", written,
-        kh + ",s1_delta_T[mm],paper_delta_T[mm],s1_delta_dot_T[mm/s],paper_delta_dot_T[mm/s],s1_d[mm*s^-1/2],"
-        "s2_d[mm*s^-1/2],s3_d[mm*s^-1/2],s1_t_ss[s]");
+               kh + ",s1_delta_T[mm],paper_delta_T[mm],s1_delta_dot_T[mm/s],paper_delta_dot_T[mm/s],s1_d[mm*s^-1/2],"
+               "s2_d[mm*s^-1/2],s3_d[mm*s^-1/2],s1_t_ss[s]");
   for (const MuAnalysis& m : a.mu) {
     const PaperReference* p = a.keys.empty() ? paper_at(m.mu) : nullptr;
     const double nan = std::nan("");
@@ -183,7 +182,7 @@ void ReportFiles::write_pdfs_csv() const {
   ReportFile cd(dir / "pdf_delta.csv", written, kh + ",lo[mm],hi[mm],count,density[1/mm]");
   ReportFile cv(dir / "pdf_delta_dot.csv", written, kh + ",lo[mm/s],hi[mm/s],count,density[s/mm]");
   ReportFile cj(dir / "joint_pdf.csv", written,
-         kh + ",t[s],delta_lo[mm],delta_hi[mm],delta_dot_lo[mm/s],delta_dot_hi[mm/s],count,density[s/mm^2]");
+                kh + ",t[s],delta_lo[mm],delta_hi[mm],delta_dot_lo[mm/s],delta_dot_hi[mm/s],count,density[s/mm^2]");
   ReportFile co(dir / "pdf_outside.csv", written, kh + ",quantity,t[s],outside,total,fraction");
   for (const MuAnalysis& m : a.mu) {
     for (std::size_t i = 0; i < m.delta_pdf.counts.size(); ++i)

@@ -20,7 +20,6 @@ using report_text::fixed;
 using report_text::general;
 using report_text::percent;
 
-
 constexpr double U = kToPaperUnits;
 
 std::string median_ci(const BoxStats& b, double scale, int decimals) {
