@@ -3,7 +3,9 @@ stands still while the node is paused."""
 import csv
 import threading
 import time
+import xmlrpc.client
 
+import rosgraph
 import rospy
 from std_srvs.srv import Empty, Trigger
 
@@ -44,8 +46,28 @@ class Collector:
             return list(self._msgs)
 
     def wait_connected(self, timeout=20.0):
+        """Until a publisher is connected on both sides. This side counts a connection once the
+        publisher's header has arrived, and roscpp writes that header before it adds the link to
+        its publication: a message published in between (a reset's one state) is not sent here.
+        So the publishers' own lists of links (XML-RPC getBusInfo) must name this node too."""
         wait_until(lambda: self.sub.get_num_connections() > 0, timeout,
                    'a publisher of ' + self.sub.name)
+        wait_until(self._publishers_link_here, timeout,
+                   'the publishers of %s to list this node among their links' % self.sub.name)
+
+    def _publishers_link_here(self):
+        me = rospy.get_name()
+        master = rosgraph.Master(me)
+        publishers = next((nodes for topic, nodes in master.getSystemState()[0] if topic == self.sub.resolved_name),
+                          [])
+        linked = 0
+        for node in publishers:
+            try:
+                _, _, links = xmlrpc.client.ServerProxy(master.lookupNode(node)).getBusInfo(me)
+            except (OSError, xmlrpc.client.Error, rosgraph.MasterError):
+                continue  # a node gone since the master listed it
+            linked += any(l[1] == me and l[2] == 'o' and l[4] == self.sub.resolved_name for l in links)
+        return linked > 0 and linked >= self.sub.get_num_connections()
 
 
 def wait_until(predicate, timeout, what):
