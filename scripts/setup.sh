@@ -29,12 +29,13 @@ GD_PACKAGES=(
 )
 
 gd_install() {
-  # One dpkg-query for all (one per package is slow); an unknown package is simply not listed.
-  local installed missing=()
-  installed=$(dpkg-query -W -f='${Package} ${Status}\n' "${GD_PACKAGES[@]}" 2>/dev/null |
-    sed -n 's/ install ok installed$//p' || true)
+  # One dpkg-query for all and no process per package (each is slow); an unknown package is not listed.
+  local -A installed=()
+  local p missing=()
+  while read -r p; do installed[$p]=1; done < <(dpkg-query -W -f='${Package} ${Status}\n' "${GD_PACKAGES[@]}" \
+    2>/dev/null | sed -n 's/ install ok installed$//p' || true)
   for p in "${GD_PACKAGES[@]}"; do
-    grep -qxF "$p" <<< "$installed" || missing+=("$p")
+    [ -n "${installed[$p]:-}" ] || missing+=("$p")
   done
   if [ ${#missing[@]} -gt 0 ]; then
     echo "setup: installing ${missing[*]}"
