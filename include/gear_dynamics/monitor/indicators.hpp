@@ -74,6 +74,8 @@ class IndicatorTracker {
   // Same, also returning the window's signals.
   std::vector<double> window(const Eigen::VectorXd& tsa, GearSignals& signals);
   void reset();
+  // NA4*'s healthy residual variance from the next window on (a reference per load band).
+  void set_baseline(double baseline_residual_variance) { baseline_ = baseline_residual_variance; }
   int windows() const { return windows_; }
   const IndicatorSettings& settings() const { return settings_; }
 
