@@ -1,4 +1,4 @@
-// gear_monitor: the condition monitor on a live gear (doc/monitor.md §6). Subscribes to the
+// gear_monitor: the condition monitor on a live gear (doc/monitor.md §5). Subscribes to the
 // simulator's state_batch (gear_dynamics/GearStateBatch; or state, gear_dynamics/GearState, with
 // ~input:=state) and run_info, cuts the signal into windows of whole revolutions by the shaft angle
 // phi0 + Omega t, applies the healthy reference (gear_dynamics_monitor) and publishes each window's

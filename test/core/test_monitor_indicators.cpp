@@ -1,4 +1,4 @@
-// The condition indicators against closed forms on analytic signals (doc/monitor.md §5).
+// The condition indicators against closed forms on analytic signals (doc/monitor.md §7).
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -1,4 +1,4 @@
-// The time-synchronous average and the revolution windows against closed forms (doc/monitor.md §5).
+// The time-synchronous average and the revolution windows against closed forms (doc/monitor.md §7).
 #include <gtest/gtest.h>
 
 #include <cmath>
