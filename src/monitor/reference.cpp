@@ -134,12 +134,17 @@ std::vector<std::vector<RevolutionWindow>> simulate_windows(const ModelConfig& c
       ensemble.step();
       const std::int64_t k = ensemble.step_index();
       if (k < first_recorded || k % m.decimation != 0) continue;
-      const double angle = shaft_angle(gear, ensemble.time());
+      const double t = ensemble.time(), angle = shaft_angle(gear, t);
+      // K and e are the block's, not a lane's: once per sample.
+      const bool force = m.signal == MonitoredSignal::kMeshForce;
+      const double k_t = force ? ensemble.mesh().stiffness(t) : 0.0;
+      const double e_t = force ? ensemble.mesh().transmission_error(t) : 0.0;
       for (int i = 0; i < lanes; ++i) {
         auto& mine = out[b0 + i];
         if (static_cast<int>(mine.size()) >= windows) continue;
-        if (auto w = cut[i].add(angle, monitored_value(ensemble, i, m.signal), ensemble.load()(i)))
-          mine.push_back(std::move(*w));
+        const double delta = ensemble.padded_delta()(i);
+        const double value = force ? mesh_force(gear, k_t, delta - e_t, ensemble.padded_velocity()(i)) : delta;
+        if (auto w = cut[i].add(angle, value, ensemble.load()(i))) mine.push_back(std::move(*w));
       }
     }
   }
