@@ -12,6 +12,7 @@ import tempfile
 import time
 import unittest
 
+import rosgraph
 import rospkg
 import rospy
 import rostest
@@ -58,6 +59,15 @@ class Monitor(unittest.TestCase):
 
             for c in indicators.values():
                 c.wait_connected(timeout=30.0)
+            # Each monitor subscribed to its simulator before the run starts: the windows are then
+            # those of simulate_windows on the same stream.
+            master = rosgraph.Master('/monitor_test')
+
+            def subscribed(ns):
+                subscribers = dict(master.getSystemState()[1]).get('/%s/state_batch' % ns, [])
+                return '/%s/gear_monitor' % ns in subscribers
+            for ns in ('healthy', 'cracked'):
+                wait_until(lambda: subscribed(ns), 30.0, '/%s/gear_monitor on /%s/state_batch' % (ns, ns))
             for ns in ('healthy', 'cracked'):
                 services('/%s/gear_simulator' % ns)['unpause']()
 
