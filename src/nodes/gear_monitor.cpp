@@ -8,6 +8,7 @@
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <ros/ros.h>
 
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <optional>
@@ -42,6 +43,7 @@ class GearMonitor {
     const gd::ModelConfig config = gd::parse_config(reference.config);
     gear_ = gd::derive(config.gear);
     schedule_ = std::make_unique<gd::MeshSchedule>(gear_, config.run.time_step);
+    time_step_ = config.run.time_step;
     warmup_ = reference.settings.warmup;
     monitor_ = std::make_unique<gd::ConditionMonitor>(std::move(reference));
     const auto& m = monitor_->settings();
@@ -78,6 +80,7 @@ class GearMonitor {
       return;
     }
     checked_ = true;
+    if (info.time_step > 0.0) time_step_ = info.time_step;
   }
 
   void batch(const gear_dynamics::GearStateBatch& b) {
@@ -106,7 +109,9 @@ class GearMonitor {
       const double e = schedule_->transmission_error(s.t);
       value = gd::mesh_force(gear_, s.mesh_stiffness, s.delta - e, s.delta_dot);
     }
-    const auto window = windows_->add(gd::shaft_angle(gear_, s.t), value, s.phi);
+    // The state's t is the grid time rounded to whole nanoseconds; the engine's angle is at n h.
+    const double grid_t = std::round(s.t / time_step_) * time_step_;
+    const auto window = windows_->add(gd::shaft_angle(gear_, grid_t), value, s.phi);
     if (!window) return;
     const gd::Assessment a = monitor_->assess(*window);
     ++window_count_;
@@ -187,7 +192,7 @@ class GearMonitor {
   diagnostic_updater::Updater updater_;
   std::string reference_path_;
   int debounce_ = 2;
-  double stale_timeout_ = 2.0, warmup_ = 0.0, last_t_ = -1.0;
+  double stale_timeout_ = 2.0, warmup_ = 0.0, last_t_ = -1.0, time_step_ = 0.0;
   gd::GearPair gear_;
   std::unique_ptr<gd::MeshSchedule> schedule_;
   std::unique_ptr<gd::ConditionMonitor> monitor_;

@@ -16,9 +16,11 @@ int main(int argc, char** argv) {
   gd::tools::ModelOptions model;
   gd::tools::add_model_options(app, model);
   gd::ReferenceSettings s;
-  std::string output, assess, signal = "delta", gear = "pinion";
+  std::string output, assess, csv, signal = "delta", gear = "pinion";
   app.add_option("--output", output, "write the reference to FILE")->type_name("FILE");
   app.add_option("--assess", assess, "apply the reference FILE to runs of this configuration")->type_name("FILE");
+  app.add_option("--csv", csv, "with --assess: every window's indicators, T2, score and CUSUM into FILE")
+      ->type_name("FILE");
   app.add_option("--signal", signal, "delta or mesh_force (default delta)");
   app.add_option("--gear", gear, "whose revolutions the TSA follows: pinion or wheel (default pinion)");
   app.add_option("--revolutions", s.monitor.revolutions_per_window, "revolutions per window (default 1)");
@@ -67,6 +69,15 @@ int main(int argc, char** argv) {
     double assessing = 0;  // [s] in ConditionMonitor::assess: the per-window cost of the monitor
     std::vector<int> exceeded(ref.indicators.size(), 0);
     int windows = 0, warn = 0, detected = 0;
+    std::FILE* table = nullptr;
+    if (!csv.empty()) {
+      table = std::fopen(csv.c_str(), "w");
+      if (!table) throw std::runtime_error("cannot write --csv " + csv);
+      std::fprintf(table, "realization,window,load,band");
+      for (const auto& n : ref.indicators) std::fprintf(table, ",%s", n.c_str());
+      std::fprintf(table, ",t2,score,cusum,level\n");
+    }
+    std::uint64_t realization = s.first_realization;
     double delay = 0;
     for (const auto& run : runs) {
       monitor.reset();
@@ -79,12 +90,19 @@ int main(int argc, char** argv) {
         warn += a.t2_alarm;
         for (std::size_t i = 0; i < exceeded.size(); ++i) exceeded[i] += a.exceeded[i];
         if (a.cusum_alarm && first_error < 0) first_error = static_cast<int>(w) + 1;
+        if (table) {
+          std::fprintf(table, "%llu,%zu,%.17g,%zu", static_cast<unsigned long long>(realization), w + 1, a.load, a.band);
+          for (double v : a.indicators) std::fprintf(table, ",%.17g", v);
+          std::fprintf(table, ",%.17g,%.17g,%.17g,%s\n", a.t2, a.score, a.cusum, gd::to_string(a.health));
+        }
       }
+      ++realization;
       if (first_error > 0) {
         ++detected;
         delay += first_error;
       }
     }
+    if (table) std::fclose(table);
     std::printf("%d runs x %d windows: T2 above its threshold in %.3f of the windows (nominal %.3f); the CUSUM "
                 "alarmed in %d runs, after %.1f windows on average; simulated in %.2f s, assessed in %.1f us per "
                 "window\n",

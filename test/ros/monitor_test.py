@@ -4,7 +4,9 @@ healthy gear (8 windows each); the simulators run held-out streams 5001 (healthy
 root crack in pinion tooth 0). The healthy monitor stays OK over its 8 windows; the cracked one
 reports ERROR by its third window (the CUSUM, k = 0.5 and h = 3.49, passes h after two windows at
 the reference's largest score, and the debounce then needs two ERROR windows); both report STALE
-once the simulators stop at t_end; a reference for another backlash is refused naming the key."""
+once the simulators stop at t_end; a reference for another backlash is refused naming the key.
+The live windows' indicators equal those of gear_monitor_reference --assess on the same streams."""
+import csv
 import os
 import subprocess
 import sys
@@ -23,6 +25,7 @@ from simtest import Collector, services, wait_until
 
 PKG = rospkg.RosPack().get_path('gear_dynamics')
 HEALTHY_YAML = os.path.join(PKG, 'test', 'ros', 'monitor_healthy.yaml')
+CRACKED_YAML = os.path.join(PKG, 'test', 'ros', 'monitor_cracked.yaml')
 WINDOWS = 8
 ERROR_BY = 3  # windows: CUSUM 2 + debounce 1 more
 
@@ -73,6 +76,26 @@ class Monitor(unittest.TestCase):
 
             got = {ns: indicators[ns].wait_for(lambda m: len(m) >= WINDOWS, 120.0, '%d windows' % WINDOWS)
                    for ns in ('healthy', 'cracked')}
+            # The live windows are simulate_windows' on the same stream: the node samples the
+            # simulator's states at the reference's grid steps, at the engine's angle, and the
+            # states are the engine's bit for bit (test_realization); 1e-12 leaves room for
+            # the decimal text of the offline CSV only (17 digits).
+            for ns, yaml_file, stream in (('healthy', HEALTHY_YAML, 5001), ('cracked', CRACKED_YAML, 5000)):
+                offline = os.path.join(folder, ns + '.csv')
+                subprocess.run(['rosrun', 'gear_dynamics', 'gear_monitor_reference', '--assess', reference,
+                                '--config', yaml_file, '--first', str(stream), '--realizations', '1',
+                                '--windows', str(WINDOWS), '--csv', offline],
+                               check=True, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=120)
+                with open(offline) as f:
+                    rows = list(csv.DictReader(f))
+                self.assertEqual(len(rows), WINDOWS)
+                for row, m in zip(rows, got[ns]):
+                    self.assertEqual(int(row['window']), m.window)
+                    for name, value in zip(m.names, m.values):
+                        self.assertAlmostEqual(float(row[name]) / value, 1.0, delta=1e-12, msg=(ns, m.window, name))
+                    self.assertAlmostEqual(float(row['t2']) / m.t2, 1.0, delta=1e-12, msg=(ns, m.window))
+                    self.assertAlmostEqual(float(row['cusum']), m.cusum, delta=1e-12 * max(1.0, m.cusum))
+
             healthy = got['healthy'][:WINDOWS]
             self.assertEqual([m.window for m in healthy], list(range(1, WINDOWS + 1)))
             self.assertEqual([m.reported_level for m in healthy], [DiagnosticStatus.OK] * WINDOWS,
