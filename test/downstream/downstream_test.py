@@ -34,6 +34,7 @@ CALLS = {
     "dynamics": "gd::LorenzLanes({}, 1e-3, {{1.0, 1.0, 1.0}}).time()",
     "analysis": "gd::analyse_study(gd::BatchInputs{}, gd::AnalysisSettings{}).points.size()",
     "report": "gd::paper_reference().size()",
+    "monitor": "gd::indicator_names().size()",
     "ros": "gd::make_poincare_point(gd::SectionPoint{}).t",
     "aggregation": "static_cast<double>(gd::batch_complete(\"/nonexistent\"))",
 }

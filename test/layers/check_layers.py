@@ -30,6 +30,8 @@ LAYERS = {
     "dynamics": ["config", "maths"],
     "analysis": ["batch", "maths"],
     "report": ["analysis"],
+    # The condition monitor's core: indicators on maths, the healthy reference on config's model.
+    "monitor": ["config", "maths"],
 }
 # Folders above the core, allowed ROS: the ROS libraries, the nodes' mains and the CLIs.
 OUTSIDE = {"ros", "nodes", "tools"}
