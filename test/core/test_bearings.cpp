@@ -324,7 +324,77 @@ TEST(Bearings, ConfigurationKeys) {
     EXPECT_NE(what.find("rigid"), std::string::npos) << what;
     EXPECT_NE(what.find("torsional"), std::string::npos) << what;
   }
+  // Bearings too stiff for the step: refused by name, with the step that would do.
+  root["gear_pair"]["model"] = "bearings";
+  root["gear_pair"]["bearing_stiffness"] = 1.0e13;
+  try {
+    gd::parse_config(root);
+    FAIL() << "k_b = 1e13 N/m accepted at h = " << c.run.time_step;
+  } catch (const gd::ConfigError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("run.time_step"), std::string::npos) << what;
+    EXPECT_NE(what.find("gear_pair.bearing_stiffness = 1e+13"), std::string::npos) << what;
+  }
   // The torsional paths refuse the model they do not run, by name.
   gd::GearInputs in = c.gear;
   EXPECT_THROW(gd::Realization(gd::derive(in), 1e-6, {}, s1(20.0, 0.0), 1), std::invalid_argument);
+}
+
+// The friction force's direction against the kinematic sliding velocity, computed here from the
+// geometry of doc/model.md §11: at pair j the pinion slides on the wheel across the LOA at
+// v_s = -omega1 X_j + omega2 (lp - X_j), and friction opposes it, so sigma = sum_j lambda_j
+// (-sign v_s). Square wave (lambda 1, or 1/2 each) and the potential-energy mesh (lambda = the
+// pairs' stiffness shares) over two mesh periods; friction power sum_j F_fj v_s,j <= 0 throughout.
+TEST(Bearings, FrictionOpposesTheSlidingVelocity) {
+  const gd::ModelConfig c = shipped();
+  for (auto stiffness : {gd::MeshStiffnessModel::kSquareWave, gd::MeshStiffnessModel::kPotentialEnergy}) {
+    gd::GearInputs in = bearings_inputs(c);
+    in.friction_direction = gd::FrictionDirection::kReversing;
+    in.mesh_stiffness = stiffness;
+    const gd::GearPair g = gd::derive(in);
+    const gd::MeshSchedule mesh(g, c.run.time_step);
+    ASSERT_NE(mesh.table(), nullptr);
+    const double w1 = in.pinion_speed, w2 = w1 * in.pinion_teeth / in.gear_teeth;
+    int approach = 0, recess = 0;
+    for (int k = 0; k < 2000; ++k) {
+      const double a = (k + 0.5) * 2.0 * g.mesh_period_angle / 2000.0;
+      // The pairs in contact from the geometry: pair m from X_B, pair m + 1 from X_A after phi_m.
+      const double phi = std::fmod(a, g.mesh_period_angle);
+      std::vector<double> x{g.x_b + g.base_radius1 * phi};
+      if (phi >= g.single_pair_angle) x.push_back(g.x_a + g.base_radius1 * (phi - g.single_pair_angle));
+      std::vector<double> lambda(x.size(), 1.0 / static_cast<double>(x.size()));
+      if (stiffness == gd::MeshStiffnessModel::kPotentialEnergy) {
+        const auto pairs = mesh.table()->contacts(std::fmod(a, mesh.table()->period()));
+        ASSERT_EQ(pairs.size(), x.size()) << "phi " << phi << " phi_m " << g.single_pair_angle << " a " << a;
+        double total = 0.0;
+        for (const auto& p : pairs) total += p.stiffness;
+        for (std::size_t j = 0; j < x.size(); ++j) {
+          EXPECT_NEAR(pairs[j].x, x[j], 1e-12);
+          lambda[j] = pairs[j].stiffness / total;
+        }
+      }
+      double expected = 0.0, power = 0.0;
+      const double sigma = gd::friction_share(g, mesh.table(), a);
+      for (std::size_t j = 0; j < x.size(); ++j) {
+        const double vs = -w1 * x[j] + w2 * (g.line_of_centres_length - x[j]);
+        expected += lambda[j] * (vs > 0.0 ? -1.0 : 1.0);
+        (vs > 0.0 ? approach : recess) += 1;
+      }
+      EXPECT_NEAR(sigma, expected, 1e-12) << "angle " << a;
+      // Per pair the force on the pinion along +x is mu s_j lambda_j F (F > 0); its power is <= 0.
+      for (std::size_t j = 0; j < x.size(); ++j) {
+        const double vs = -w1 * x[j] + w2 * (g.line_of_centres_length - x[j]);
+        const double s = x[j] >= g.x_p ? 1.0 : -1.0;  // the code's rule, doc/model.md §2
+        power += s * lambda[j] * vs;
+      }
+      EXPECT_LE(power, 0.0);
+    }
+    EXPECT_GT(approach, 100);
+    EXPECT_GT(recess, 100);
+    // And the model runs on this mesh: 20 ms of the paper's S1, finite, with impacts.
+    gd::BearingsRealization r(g, c.run.time_step, c.initial, s1(20.0, 0.04), c.seed);
+    for (int n = 0; n < 8000; ++n) r.step();
+    EXPECT_TRUE(r.state().allFinite());
+    EXPECT_GT(r.crossings(), 2);
+  }
 }
