@@ -1,7 +1,7 @@
 // gear_bearings_bench: the cost of a realization-step of the bearings model against the torsional
 // model's, both paths of it: the SIMD ensemble (cost per lane) and the one-lane Realization. S1 and
-// stochastic realizations of the default configuration at a given load; prints ns per step.
-#include <chrono>
+// stochastic realizations of the default configuration at a given load; prints CPU ns per step.
+#include <ctime>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -31,11 +31,11 @@ int main(int argc, char** argv) try {
   const auto steps = static_cast<std::int64_t>(std::llround(duration / h));
   std::vector<gd::LaneSpec> specs;
   for (int i = 0; i < lanes; ++i) specs.push_back(gd::stochastic_lane(c, c.friction_coefficient, static_cast<std::uint64_t>(i)));
-  using Clock = std::chrono::steady_clock;
+  // CPU time of this (single) thread: the machine's other load does not count.
   const auto ns_per_step = [&](auto&& run) {
-    const auto t0 = Clock::now();
+    const std::clock_t t0 = std::clock();
     run();
-    return std::chrono::duration<double, std::nano>(Clock::now() - t0).count() / (static_cast<double>(steps) * lanes);
+    return 1e9 * static_cast<double>(std::clock() - t0) / CLOCKS_PER_SEC / (static_cast<double>(steps) * lanes);
   };
   const double ensemble = ns_per_step([&] {
     gd::Ensemble e(gd::derive(torsional), h, c.initial, specs, c.seed);
@@ -55,7 +55,7 @@ int main(int argc, char** argv) try {
   });
   std::printf("Phi0 %g m/s^2, mu %g, %d realizations x %lld steps of %g s\n", c.load.initial_mean,
               c.friction_coefficient, lanes, static_cast<long long>(steps), h);
-  std::printf("torsional, ensemble (SIMD lanes): %.2f ns per realization-step\n", ensemble);
+  std::printf("torsional, ensemble (SIMD lanes): %.2f ns CPU per realization-step\n", ensemble);
   std::printf("torsional, one lane (Realization): %.2f ns\n", one_lane);
   std::printf("bearings (BearingsRealization):    %.2f ns  (x%.2f the ensemble, x%.2f the one lane)\n", bear,
               bear / ensemble, bear / one_lane);

@@ -97,6 +97,17 @@ inline int located_segment(const M& model, const Segment& in, typename M::State&
     const double m0 = Hr * model.deflection_rate(y), m1 = Hr * model.deflection_rate(y1);
     const double c2 = 3.0 * (d1 - d) - 2.0 * m0 - m1, c3 = 2.0 * (d - d1) + m0 + m1;
     const double e0 = detail::line(u0, in.start.error, in.end.error), de = rest * (in.end.error - in.start.error);
+    // Far from both flanks (the band of the end values widened by the most a cubic Hermite can
+    // overshoot them, 4/27 (|m0| + |m1|) taken as 1/4, and by e's change) no root can exist: the
+    // step is the branch step, as the root search below would find.
+    {
+      const double reach = 0.25 * (std::fabs(m0) + std::fabs(m1)) + std::fabs(de);
+      const double lo = std::fmin(d, d1) - e0 - reach, hi = std::fmax(d, d1) - e0 + reach;
+      if ((lo > in.b || hi < -in.b || (lo > -in.b && hi < in.b)) && s == branch_of(d1, e0 + de, in.b)) {
+        y = y1;
+        return crossings;
+      }
+    }
     Boundary bnd[2];
     const int nb = boundaries(s, in.b, bnd);
     double w = -1.0;
