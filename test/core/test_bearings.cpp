@@ -156,7 +156,7 @@ TEST(Bearings, NaturalFrequenciesMatchTheMassAndStiffnessMatrices) {
 
   const gd::BearingParameters bp = gd::bearing_parameters(g);
   const double kbar = g.k_mean, kb = 1.0e8;
-  // The defaults of the issue: solid discs of the pitch radii, k_b = 1e8 N/m.
+  // The defined defaults (doc/model.md §11): solid discs of the pitch radii, k_b = 1e8 N/m.
   EXPECT_DOUBLE_EQ(bp.pinion_mass, 7800.0 * M_PI * 0.02 * 0.02 * 0.01);
   EXPECT_DOUBLE_EQ(bp.wheel_mass, 7800.0 * M_PI * 0.08 * 0.08 * 0.01);
   // Coordinates (delta_t, y_p, y_g, x_p, x_g).
