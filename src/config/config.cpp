@@ -5,6 +5,7 @@
 #include <memory>
 #include <sstream>
 
+#include "gear_dynamics/engine/bearings.hpp"
 #include "gear_dynamics/engine/normal_stream.hpp"
 #include "gear_dynamics/model/mesh_table.hpp"
 
@@ -20,6 +21,10 @@ struct EnumNames<MeshStiffnessModel> {
 template <>
 struct EnumNames<FrictionDirection> {
   static std::vector<std::string> names() { return {"constant", "reversing"}; }
+};
+template <>
+struct EnumNames<GearModel> {
+  static std::vector<std::string> names() { return {"torsional", "bearings"}; }
 };
 template <>
 struct EnumNames<FaultyGear> {
@@ -102,10 +107,26 @@ const std::vector<Section<ModelConfig>>& model_sections() {
           .may_be_empty()
           .key("profile_error_sd", GD_MEMBER(profile_errors.sd), closed(0, 1e-3), "m",
                "sd of a normal profile error per tooth of both gears, drawn from run.seed, added")
+          .key("model", GD_MEMBER(gear.model),
+               "torsional: the one-degree-of-freedom model; bearings: both gears also translate on their bearings")
+          .one_of(EnumNames<GearModel>::names())
+          .omitted_at_default()
+          .key("bearing_stiffness", GD_MEMBER(gear.bearing_stiffness), closed(1e5, 1e13), "N/m",
+               "k_b, stiffness of each bearing in x and y (bearings model)")
+          .omitted_at_default()
+          .key("bearing_damping_ratio", GD_MEMBER(gear.bearing_damping_ratio), closed(0, 1), "-",
+               "zeta_b, bearing damping c = 2 zeta_b sqrt(k_b m) (bearings model)")
+          .omitted_at_default()
+          .key("pinion_mass", GD_MEMBER(gear.pinion_mass), closed(0, 1e6), "kg",
+               "m_p (bearings model); 0: a solid disc of the pitch radius, rho pi r1^2 L")
+          .omitted_at_default()
+          .key("wheel_mass", GD_MEMBER(gear.wheel_mass), closed(0, 1e6), "kg",
+               "m_g (bearings model); 0: a solid disc of the pitch radius, rho pi r2^2 L")
+          .omitted_at_default()
           .key("initial_deflection", GD_MEMBER(initial.deflection), closed(-1e-2, 1e-2), "m", "delta(0)")
           .key("initial_velocity", GD_MEMBER(initial.velocity), closed(-10, 10), "m/s", "delta_dot(0)"),
       Section<ModelConfig>("load", "load.")
-          .key("initial_mean", GD_MEMBER(load.initial_mean), closed(-kMaxLoadMean, kMaxLoadMean), "m/s^2",
+          .key("initial_mean", GD_MEMBER(load.initial_mean), closed(-kMaxConfigLoadMean, kMaxConfigLoadMean), "m/s^2",
                "E[Phi(0)]; the deterministic run S1 keeps Phi at this value")
           .key("initial_sd", GD_MEMBER(load.initial_sd), closed(0, 1e4), "m/s^2", "sd of Phi(0), normal")
           .key("drift", GD_MEMBER(load.drift), closed(-kMaxLoadDrift, kMaxLoadDrift), "m/s^3", "lambda, drift of Phi")
@@ -282,6 +303,19 @@ void validate_consistency(const ModelConfig& c) {
       e << "run.time_step = " << h << " s spans the shortest interval of the mesh (" << table->min_piece()
         << " rad: a pair entering or leaving, a spall's edge or the pitch point) at pinion_speed = "
         << c.gear.pinion_speed << " rad/s; allowed time_step < " << table->min_piece() / c.gear.pinion_speed << " s";
+      errors.push_back(e.str());
+      e.str("");
+    }
+  }
+  if (errors.empty() && c.gear.model == GearModel::kBearings) {
+    // The bearings add modes above the contact's: the highest of the pair in contact decides.
+    const double K = is_paper_mesh(c.gear) ? std::max(g.k1, g.k2) : shared_mesh_table(g)->max_stiffness();
+    const double wh = bearings_max_frequency(g, K, kMaxFrictionCoefficient) * h;
+    if (!(wh < kMaxOmegaTimesStep)) {
+      e << "run.time_step = " << h << " s is too large for the bearings model: omega_max h = " << wh
+        << " with omega_max = " << wh / h << " rad/s (gear_pair.bearing_stiffness = " << c.gear.bearing_stiffness
+        << " N/m); RK4 needs omega_max h < " << kMaxOmegaTimesStep << ", i.e. time_step < "
+        << kMaxOmegaTimesStep / (wh / h) << " s";
       errors.push_back(e.str());
       e.str("");
     }

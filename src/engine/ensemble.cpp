@@ -23,6 +23,9 @@ Ensemble::Ensemble(const GearPair& gear, double time_step, const InitialState& i
     : gear_(gear), mesh_(gear, time_step), h_(time_step), initial_(initial), spec_(std::move(lanes)),
       seed_(seed) {
   if (spec_.empty()) throw std::invalid_argument("Ensemble: a block needs at least one lane");
+  if (gear.in.model != GearModel::kTorsional)  // BearingsRealization steps it (engine/bearings.hpp)
+    throw std::invalid_argument(
+        "gear_pair.model = bearings: the ensemble (batch) runs the torsional model only; gear_run runs bearings");
   for (const LaneSpec& s : spec_) {
     if (!s.stochastic && (s.sigma != 0.0 || s.load_sd != 0.0))
       throw std::invalid_argument("Ensemble: a lane without a random stream needs sigma = 0 and load_sd = 0");

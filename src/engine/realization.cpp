@@ -9,6 +9,10 @@ Realization::Realization(const GearPair& gear, double time_step, const InitialSt
                          const LaneSpec& lane, std::uint64_t seed)
     : gear_(gear), mesh_(gear, time_step), h_(time_step), sqrt_h_(std::sqrt(time_step)), initial_(initial),
       spec_(lane), stream_(seed, lane.realization), seed_(seed) {
+  if (gear.in.model != GearModel::kTorsional)  // BearingsRealization steps it (engine/bearings.hpp)
+    throw std::invalid_argument(
+        "gear_pair.model = bearings: the one-lane path (live node, gear_analyze) runs the torsional model only; "
+        "gear_run runs bearings");
   if (!spec_.stochastic && (spec_.sigma != 0.0 || spec_.load_sd != 0.0))
     throw std::invalid_argument("Realization: a lane without a random stream needs sigma = 0 and load_sd = 0");
   reset();

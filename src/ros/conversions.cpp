@@ -52,7 +52,11 @@ YAML::Node yaml_from_namespace(const ros::NodeHandle& nh) {
 }
 
 ModelConfig load_model_config(const ros::NodeHandle& nh) {
-  return parse_config(yaml_from_parameters(nh, {"gear_pair", "load", "run"}));
+  ModelConfig c = parse_config(yaml_from_parameters(nh, {"gear_pair", "load", "run"}));
+  if (c.gear.model != GearModel::kTorsional)  // the nodes step the torsional model only (doc/architecture.md)
+    throw ConfigError("gear_pair.model = bearings is not run by the ROS nodes; allowed: torsional "
+                      "(gear_run runs bearings)");
+  return c;
 }
 
 RunInfo make_run_info(const ModelConfig& config, RunKind kind, std::uint32_t realization,

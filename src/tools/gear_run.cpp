@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <numeric>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -17,7 +18,9 @@
 #include "gear_dynamics/config/parameters.hpp"
 #include "gear_dynamics/config/simulator_settings.hpp"
 #include "gear_dynamics/config/sweep.hpp"
+#include "gear_dynamics/engine/bearings.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
+#include "gear_dynamics/engine/observers.hpp"
 #include "gear_dynamics/engine/simulation.hpp"
 #include "cli.hpp"
 
@@ -29,7 +32,8 @@ const char* kDescription = R"(Runs the deterministic run S1 and stochastic reali
 The defaults come from the package's config/ folder: $GEAR_DYNAMICS_CONFIG_DIR if set, else the
 installed share/gear_dynamics/config, else gear_dynamics/config on $ROS_PACKAGE_PATH.
 Snapshot times after run.duration are dropped with a notice (a short --set run.duration run).
-CSV columns (SI): run,t,delta,delta_dot,phi,center_distance.
+CSV columns (SI): run,t,delta,delta_dot,phi,center_distance; with gear_pair.model = bearings delta is
+the mesh deflection delta_m, followed by delta_t,mesh_force,pinion_fx,pinion_fy,wheel_fx,wheel_fy.
 Summary lines use the paper's units: mm, mm/s, mm s^-1/2.)";
 
 struct Options {
@@ -111,6 +115,62 @@ void drop_late_snapshots(YAML::Node& root) {
   run["snapshot_times"] = kept;
 }
 
+// The bearings model (doc/model.md §11), one realization after the other: the CSV's columns of the
+// torsional model with delta = delta_m, then the torsional coordinate, the mesh force and the
+// bearing forces; the summary line, then the RMS over the window of F_m and the bearing forces.
+void run_bearings(const gd::ModelConfig& pc, const std::vector<gd::LaneSpec>& lanes,
+                  const std::vector<std::string>& names, std::ostream* csv, double rate) {
+  const gd::GearPair gear = gd::derive(pc.gear);
+  const gd::RunSettings& run = pc.run;
+  const std::int64_t total = run.steps(), window = run.steps_for(run.window);
+  const std::int64_t every = csv ? std::max<std::int64_t>(1, std::llround(1.0 / (rate * run.time_step))) : 0;
+  std::int64_t block = std::gcd(std::max<std::int64_t>(window, 1), total);
+  if (every > 0) block = std::gcd(block, every);
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<std::string> lines;
+  for (std::size_t i = 0; i < lanes.size(); ++i) {
+    gd::BearingsRealization r(gear, run.time_step, pc.initial, lanes[i], pc.seed);
+    gd::WindowRange range(1, window, std::max<std::int64_t>(block, 1));
+    double sum[5] = {}, count = 0.0;
+    const auto observe = [&] {
+      const std::int64_t n = r.step_index();
+      const gd::BearingsOutputs o = r.outputs();
+      double d = o.delta_m, v = o.delta_m_dot;
+      range.observe(n, Eigen::Map<const Eigen::ArrayXd>(&d, 1), Eigen::Map<const Eigen::ArrayXd>(&v, 1));
+      if (n > total - window) {
+        const double f[5] = {o.mesh_force, o.pinion_fx, o.pinion_fy, o.wheel_fx, o.wheel_fy};
+        for (int k = 0; k < 5; ++k) sum[k] += f[k] * f[k];
+        count += 1.0;
+      }
+      if (every > 0 && n % every == 0)
+        *csv << names[i] << ',' << gd::grid_time(n, run.time_step) << ',' << o.delta_m << ',' << o.delta_m_dot << ','
+             << r.load() << ',' << range.center_distance(0) << ',' << r.state()[gd::BearingsModel::kDelta] << ','
+             << o.mesh_force << ',' << o.pinion_fx << ',' << o.pinion_fy << ',' << o.wheel_fx << ',' << o.wheel_fy
+             << '\n';
+    };
+    observe();
+    while (r.step_index() < total) {
+      r.step();
+      observe();
+    }
+    const gd::BearingsOutputs o = r.outputs();
+    const auto rms = [&](int k) { return count > 0 ? std::sqrt(sum[k] / count) : 0.0; };
+    char buf[512];
+    std::snprintf(buf, sizeof buf,
+                  "%s: d = %.6f mm s^-1/2, delta_m(T) = %.6f mm, delta_m_dot(T) = %.4f mm/s, Phi(T) = %.3f mm/s^2, "
+                  "%lld crossings\n  RMS over the window: F_m %.6g N, pinion bearing x %.6g N, y %.6g N, "
+                  "wheel bearing x %.6g N, y %.6g N\n",
+                  names[i].c_str(), 1e3 * range.center_distance(0), 1e3 * o.delta_m, 1e3 * o.delta_m_dot,
+                  1e3 * r.load(), static_cast<long long>(r.crossings()), rms(0), rms(1), rms(2), rms(3), rms(4));
+    lines.push_back(buf);
+  }
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf("# bearings model, mu %.4g, seed %llu, h %g s, T %g s, window %g s, %zu runs in %.3f s wall\n",
+              pc.friction_coefficient, static_cast<unsigned long long>(pc.seed), run.time_step, run.duration,
+              run.window, lanes.size(), wall);
+  for (const std::string& l : lines) std::fputs(l.c_str(), stdout);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) try {
@@ -127,6 +187,9 @@ int main(int argc, char** argv) try {
     try {
       const gd::ModelConfig model = gd::parse_config(root);
       gd::parse_simulator_settings(root, model.run.time_step);
+      if (model.gear.model != gd::GearModel::kTorsional)  // as load_model_config (src/ros/conversions.cpp)
+        throw gd::ConfigError("gear_pair.model = bearings is not run by the ROS nodes; allowed: torsional "
+                              "(gear_run runs bearings)");
     } catch (const gd::ConfigError& e) {
       std::fprintf(stderr, "gear_simulator would refuse to start: %s\n", e.what());
       return 1;
@@ -158,7 +221,9 @@ int main(int argc, char** argv) try {
       csv = &file;
     }
     csv->precision(17);
-    *csv << "run,t,delta,delta_dot,phi,center_distance\n";
+    *csv << "run,t,delta,delta_dot,phi,center_distance"
+         << (cfg.gear.model == gd::GearModel::kBearings ? ",delta_t,mesh_force,pinion_fx,pinion_fy,wheel_fx,wheel_fy" : "")
+         << '\n';
   }
   for (const gd::StudyPoint& point : study.points) {
     const gd::ModelConfig& pc = point.config;
@@ -180,6 +245,10 @@ int main(int argc, char** argv) try {
       names.push_back(prefix + "r" + std::to_string(r));
     }
     if (lanes.empty()) throw std::runtime_error("nothing to run: --no-deterministic with --realizations 0");
+    if (pc.gear.model == gd::GearModel::kBearings) {
+      run_bearings(pc, lanes, names, csv, opt.rate);
+      continue;
+    }
 
     gd::Ensemble ensemble(gd::derive(pc.gear), pc.run.time_step, pc.initial, lanes, pc.seed);
     gd::Recorder recorder;

@@ -51,6 +51,9 @@ constexpr double kMaxFrictionCoefficient = 0.2;
 constexpr double kMaxLoadSigma = 100.0;
 // Largest |Phi| accepted as load.initial_mean and as a live load command [m/s^2].
 constexpr double kMaxLoadMean = 1.0e4;
+// Largest |E[Phi(0)]| a configuration accepts: 5x the load whose static mesh force is near 1 kN
+// (Phi = 2e4 m/s^2), at which the teeth of the default pair stay in contact.
+constexpr double kMaxConfigLoadMean = 1.0e5;
 // Largest |lambda| accepted [m/s^3].
 constexpr double kMaxLoadDrift = 1.0e6;
 // RK4 is stable for an undamped oscillator while omega h < 2 sqrt(2) (doc/model.md §5).

@@ -56,6 +56,7 @@ struct KeySpec {
   bool may_be_empty = false;  // a list may be [], a text ""
   std::vector<std::string> choices;  // a text: one of these, if any are given
   bool required = true;       // false: a missing key keeps its default
+  bool omitted_at_default = false;  // optional, and left out of the YAML form at its default
   YAML::Node default_value;   // from the default-constructed settings struct
 
   bool integer() const { return kind == KeyKind::Integer; }
@@ -214,6 +215,12 @@ class Section {
   // Modifiers of the key declared last.
   Section& optional() { return keys_.back().spec.required = false, *this; }
   Section& may_be_empty() { return keys_.back().spec.may_be_empty = true, *this; }
+  // Optional and left out of to_yaml() while at its default: a key of a model that is not the
+  // default leaves the default runs' configuration text (and so their bags) as they were.
+  Section& omitted_at_default() {
+    keys_.back().spec.required = false;
+    return keys_.back().spec.omitted_at_default = true, *this;
+  }
   Section& one_of(std::vector<std::string> choices) { return keys_.back().spec.choices = std::move(choices), *this; }
 
   // Reads every key of the table from `in` into `out` (bad keys leave their member alone).
@@ -224,7 +231,11 @@ class Section {
   // The section as a YAML map, in table order.
   YAML::Node to_yaml(const S& s) const {
     YAML::Node n(YAML::NodeType::Map);
-    for (const Key& k : keys_) n[k.spec.name] = k.get(s);
+    for (const Key& k : keys_) {
+      YAML::Node v = k.get(s);
+      if (k.spec.omitted_at_default && YAML::Dump(v) == YAML::Dump(k.spec.default_value)) continue;
+      n[k.spec.name] = v;
+    }
     return n;
   }
   SectionSpec spec() const {

@@ -15,6 +15,9 @@ enum class MeshStiffnessModel { kSquareWave, kPotentialEnergy };
 // the sliding velocity changes sign (doc/model.md §2).
 enum class FrictionDirection { kConstant, kReversing };
 enum class FaultyGear { kNone, kPinion, kWheel };
+// Which model of the pair the engine steps (doc/model.md §11): the one-degree-of-freedom torsional
+// model, or the pair with the translations of both gears on their bearings.
+enum class GearModel { kTorsional, kBearings };
 
 // A root crack in one tooth (Chaari, Fakhfakh & Haddar 2009): a straight crack that starts at the
 // root of the tooth's contact side and runs at `angle` to the tooth's centre line, `depth` long.
@@ -68,6 +71,11 @@ struct GearInputs {
   RootCrack crack;
   Spall spall;
   ProfileErrors profile_errors;
+  GearModel model = GearModel::kTorsional;
+  double bearing_stiffness = 1.0e8;     // k_b [N/m], each body and direction (bearings model)
+  double bearing_damping_ratio = 0.05;  // zeta_b [-]: c = 2 zeta_b sqrt(k_b m)
+  double pinion_mass = 0.0;             // m_p [kg]; 0: a solid disc of the pitch radius, rho pi r1^2 L
+  double wheel_mass = 0.0;              // m_g [kg]; 0: rho pi r2^2 L
 };
 
 // Derived quantities, named as in doc/model.md §3.

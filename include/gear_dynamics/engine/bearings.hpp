@@ -1,0 +1,140 @@
+// The gear pair on its bearings (doc/model.md §11): the torsional coordinate of the one-degree-of-
+// freedom model plus the translations of pinion and wheel on isotropic bearings, x across the line
+// of action (LOA) and y along it. The mesh deflection is delta_m = delta_t + y_p - y_g; the friction
+// force of the pairs in contact acts along x, on the two bodies in opposite senses. A model of the
+// engine's seam (model_step.hpp): the stepping is the generic located RK4, in src/engine/bearings.cpp.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <memory>
+
+#include "gear_dynamics/engine/ensemble.hpp"
+#include "gear_dynamics/engine/model_step.hpp"
+#include "gear_dynamics/engine/normal_stream.hpp"
+#include "gear_dynamics/model/gear_pair.hpp"
+#include "gear_dynamics/model/mesh_schedule.hpp"
+
+namespace gear_dynamics {
+
+// What the bearings add to a GearPair: the masses and the bearings' stiffness and damping.
+struct BearingParameters {
+  double pinion_mass, wheel_mass;          // m_p, m_g [kg]: the keys, or solid discs rho pi r^2 L
+  double stiffness;                        // k_b [N/m], each body and direction
+  double pinion_damping, wheel_damping;    // c = 2 zeta_b sqrt(k_b m) [N s/m]
+};
+BearingParameters bearing_parameters(const GearPair& gear);
+
+// The highest natural frequency of the pair in contact at mesh stiffness K, undamped, with the
+// torsional coordinate's Q = q3 + mu max|f| [rad/s]: what bounds RK4's step.
+double bearings_max_frequency(const GearPair& gear, double stiffness, double mu);
+
+class BearingsModel {
+ public:
+  static constexpr int kStates = 10;
+  using State = Eigen::Matrix<double, kStates, 1>;
+  // The components of the state, in order: torsional deflection and rate, then per body x, x_dot,
+  // y, y_dot (pinion first).
+  enum Index { kDelta = 0, kDeltaDot, kPinionX, kPinionXDot, kPinionY, kPinionYDot, kWheelX, kWheelXDot,
+               kWheelY, kWheelYDot };
+
+  explicit BearingsModel(const GearPair& gear);
+
+  // delta_m = delta_t + y_p - y_g and its rate.
+  double deflection(const State& y) const { return y[kDelta] + y[kPinionY] - y[kWheelY]; }
+  double deflection_rate(const State& y) const { return y[kDeltaDot] + y[kPinionYDot] - y[kWheelYDot]; }
+  // The mesh force F_m = K g + alpha |g| (delta_m_dot - e_dot) on `branch` (0 when apart) [N].
+  double mesh_force(int branch, const State& y, const model_step::MeshPoint& p) const {
+    if (branch == 0) return 0.0;
+    const double g = (deflection(y) - p.error) - (branch > 0 ? b_ : -b_);
+    return std::fma(alpha_ * (branch > 0 ? g : -g), deflection_rate(y) - p.error_rate, p.stiffness * g);
+  }
+  State derivative(int branch, const State& y, const model_step::MeshPoint& p) const {
+    const double F = mesh_force(branch, y, p);
+    const double friction = p.friction_force * F;  // on the pinion along +x, on the wheel along -x
+    State dy;
+    dy[kDelta] = y[kDeltaDot];
+    dy[kDeltaDot] = std::fma(-p.q, F, p.load);
+    dy[kPinionX] = y[kPinionXDot];
+    dy[kPinionXDot] = (friction - k_ * y[kPinionX] - cp_ * y[kPinionXDot]) * inv_mp_;
+    dy[kPinionY] = y[kPinionYDot];
+    dy[kPinionYDot] = (-F - k_ * y[kPinionY] - cp_ * y[kPinionYDot]) * inv_mp_;
+    dy[kWheelX] = y[kWheelXDot];
+    dy[kWheelXDot] = (-friction - k_ * y[kWheelX] - cg_ * y[kWheelXDot]) * inv_mg_;
+    dy[kWheelY] = y[kWheelYDot];
+    dy[kWheelYDot] = (F - k_ * y[kWheelY] - cg_ * y[kWheelYDot]) * inv_mg_;
+    return dy;
+  }
+
+  const BearingParameters& bearings() const { return p_; }
+
+ private:
+  BearingParameters p_;
+  double b_, alpha_, k_, cp_, cg_, inv_mp_, inv_mg_;
+};
+
+// sigma = sum_j s_j lambda_j at the unwrapped pinion angle a: the friction force across the LOA per
+// unit mu F_m. 1 for the paper's constant friction (D5: mu times the whole mesh force); with
+// friction_direction reversing, each pair's load share with the sign of its sliding velocity
+// (+1 beyond the pitch point). `table` is the schedule's (null on the paper's mesh).
+double friction_share(const GearPair& gear, const MeshTable* table, double a);
+
+// The outputs of one state (doc/model.md §11), SI.
+struct BearingsOutputs {
+  double delta_m, delta_m_dot;  // mesh deflection [m] and its rate [m/s]
+  double mesh_force;            // F_m [N]
+  // What each body's bearing carries: k_b u + c u_dot along x (across the LOA) and y (along it),
+  // the force the body exerts on the housing [N].
+  double pinion_fx, pinion_fy, wheel_fx, wheel_fy;
+};
+
+// One realization of the bearings model, as Realization is one of the torsional model: the same mesh
+// plan, the same random stream NormalStream(seed, realization) and load increments, so that Phi's
+// path is the torsional run's, bit for bit.
+class BearingsRealization {
+ public:
+  using State = BearingsModel::State;
+  static constexpr int kNormalChunk = Ensemble::kNormalChunk;
+
+  BearingsRealization(const GearPair& gear, double time_step, const InitialState& initial, const LaneSpec& lane,
+                      std::uint64_t seed);
+
+  // Advances by one grid step. Throws DivergenceError on a non-finite state.
+  void step();
+  void reset();
+
+  std::int64_t step_index() const { return n_; }
+  double time() const { return static_cast<double>(n_) * h_; }
+  double time_step() const { return h_; }
+  const GearPair& gear() const { return gear_; }
+  const BearingsModel& model() const { return model_; }
+  const MeshSchedule& mesh() const { return mesh_; }
+  const State& state() const { return y_; }
+  void set_state(const State& y) { y_ = y; }
+  double load() const { return load_; }
+  // Crossings of delta_m through +-b (+ e) located so far.
+  std::int64_t crossings() const { return crossings_; }
+  BearingsOutputs outputs() const;
+
+  // The located segments of grid step n from state y with loads load0 -> load1 (the one stepping path;
+  // public for the tests of the seam).
+  int advance(std::int64_t n, double load0, double load1, State& y) const;
+
+ private:
+  void refill_normals(std::uint64_t first_index);
+
+  GearPair gear_;
+  BearingsModel model_;
+  MeshSchedule mesh_;
+  double h_, sqrt_h_;
+  InitialState initial_;
+  LaneSpec spec_;
+  NormalStream stream_;
+  std::int64_t n_ = 0, crossings_ = 0;
+  State y_ = State::Zero();
+  double load_ = 0.0;
+  double normals_[kNormalChunk] = {};
+  std::uint64_t normals_first_ = 0;
+};
+
+}  // namespace gear_dynamics

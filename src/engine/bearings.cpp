@@ -1,0 +1,161 @@
+// The bearings model's stepping (engine/bearings.hpp): its own translation unit, so that it can be
+// compiled once per instruction set beside the torsional kernel.
+#include "gear_dynamics/engine/bearings.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "gear_dynamics/engine/rk4_kernel.hpp"
+#include "gear_dynamics/model/mesh_table.hpp"
+
+namespace gear_dynamics {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+}
+
+BearingParameters bearing_parameters(const GearPair& gear) {
+  const GearInputs& in = gear.in;
+  BearingParameters p;
+  const double disc = in.density * kPi * in.face_width;
+  p.pinion_mass = in.pinion_mass > 0.0 ? in.pinion_mass : disc * in.pinion_pitch_radius * in.pinion_pitch_radius;
+  p.wheel_mass = in.wheel_mass > 0.0 ? in.wheel_mass : disc * in.gear_pitch_radius * in.gear_pitch_radius;
+  p.stiffness = in.bearing_stiffness;
+  p.pinion_damping = 2.0 * in.bearing_damping_ratio * std::sqrt(p.stiffness * p.pinion_mass);
+  p.wheel_damping = 2.0 * in.bearing_damping_ratio * std::sqrt(p.stiffness * p.wheel_mass);
+  return p;
+}
+
+double bearings_max_frequency(const GearPair& gear, double stiffness, double mu) {
+  const BearingParameters p = bearing_parameters(gear);
+  const double f_max = std::max(std::fabs(gear.friction_factor(0.0)), std::fabs(gear.friction_factor(gear.mesh_period_angle)));
+  // (delta_t, y_p, y_g): V = 1/2 K (delta_t + y_p - y_g)^2 + 1/2 k_b (y_p^2 + y_g^2); x's modes are
+  // sqrt(k_b / m), below the y ones.
+  Eigen::Matrix3d M = Eigen::Matrix3d::Zero(), K;
+  M.diagonal() << 1.0 / (gear.q3 + mu * f_max), p.pinion_mass, p.wheel_mass;
+  const Eigen::Vector3d grad(1.0, 1.0, -1.0);
+  K = stiffness * grad * grad.transpose();
+  K(1, 1) += p.stiffness;
+  K(2, 2) += p.stiffness;
+  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::Matrix3d> es(K, M, Eigen::EigenvaluesOnly);
+  return std::sqrt(es.eigenvalues().maxCoeff());
+}
+
+BearingsModel::BearingsModel(const GearPair& gear)
+    : p_(bearing_parameters(gear)),
+      b_(gear.in.backlash),
+      alpha_(gear.damping_coefficient),
+      k_(p_.stiffness),
+      cp_(p_.pinion_damping),
+      cg_(p_.wheel_damping),
+      inv_mp_(1.0 / p_.pinion_mass),
+      inv_mg_(1.0 / p_.wheel_mass) {}
+
+double friction_share(const GearPair& gear, const MeshTable* table, double a) {
+  if (gear.in.friction_direction == FrictionDirection::kConstant) return 1.0;
+  const auto sign = [&](double x) { return x >= gear.x_p ? 1.0 : -1.0; };
+  if (table && gear.in.mesh_stiffness == MeshStiffnessModel::kPotentialEnergy) {
+    const double P = table->period();
+    double total = 0.0, share = 0.0;
+    for (const MeshContact& c : table->contacts(a - std::floor(a / P) * P)) {
+      total += c.stiffness;
+      share += c.stiffness * sign(c.x);
+    }
+    return share / total;
+  }
+  // The square wave: 1 in single contact, 1/2 each in double contact.
+  const double phi = a - std::floor(a / gear.mesh_period_angle) * gear.mesh_period_angle;
+  const double ref = sign(gear.x_b + gear.base_radius1 * phi);
+  if (phi < gear.single_pair_angle) return ref;
+  return 0.5 * (ref + sign(gear.x_a + gear.base_radius1 * (phi - gear.single_pair_angle)));
+}
+
+BearingsRealization::BearingsRealization(const GearPair& gear, double time_step, const InitialState& initial,
+                                         const LaneSpec& lane, std::uint64_t seed)
+    : gear_(gear), model_(gear), mesh_(gear, time_step), h_(time_step), sqrt_h_(std::sqrt(time_step)),
+      initial_(initial), spec_(lane), stream_(seed, lane.realization) {
+  if (!spec_.stochastic && (spec_.sigma != 0.0 || spec_.load_sd != 0.0))
+    throw std::invalid_argument("BearingsRealization: a lane without a random stream needs sigma = 0 and load_sd = 0");
+  reset();
+}
+
+void BearingsRealization::reset() {
+  n_ = 0;
+  crossings_ = 0;
+  refill_normals(0);
+  y_ = State::Zero();
+  y_[BearingsModel::kDelta] = initial_.deflection;
+  y_[BearingsModel::kDeltaDot] = initial_.velocity;
+  load_ = spec_.load_mean + spec_.load_sd * normals_[0];  // as Realization::reset
+}
+
+void BearingsRealization::refill_normals(std::uint64_t first_index) {
+  normals_first_ = first_index;
+  if (spec_.stochastic) stream_.fill(first_index, normals_, kNormalChunk);
+}
+
+int BearingsRealization::advance(std::int64_t n, double load0, double load1, State& y) const {
+  const StepPlan plan = mesh_.plan(n);
+  const double q3 = gear_.q3, mu = spec_.mu;
+  const double speed = gear_.in.pinion_speed, a_start = gear_.in.mesh_phase + speed * static_cast<double>(n) * h_;
+  const MeshTable* table = mesh_.table();
+  int crossings = 0;
+  for (int k = 0; k < plan.segments; ++k) {
+    const StepSegment& seg = plan.segment[k];
+    const double H = (seg.end - seg.begin) * h_;
+    const kernel::SegmentLoads<double> l = kernel::segment_loads<double>(seg, q3, mu, load0, load1);
+    // sigma at the stage times, a billionth of the segment inside it (its side of a jump).
+    const double inset = 1e-9 * (seg.end - seg.begin);
+    const auto share = [&](double u) {
+      return mu == 0.0 ? 0.0 : mu * friction_share(gear_, table, a_start + speed * h_ * u);
+    };
+    const double e_dot = (seg.error_end - seg.error_start) / H;
+    const double mid = 0.5 * (seg.begin + seg.end);
+    model_step::Segment s{H,
+                          gear_.in.backlash,
+                          {seg.stiffness_start, l.qa, share(seg.begin + inset), l.la, seg.error_start, e_dot},
+                          {seg.stiffness_mid, l.qm, share(mid), 0.5 * (l.la + l.lb),
+                           0.5 * (seg.error_start + seg.error_end), e_dot},
+                          {seg.stiffness_end, l.qb, share(seg.end - inset), l.lb, seg.error_end, e_dot}};
+    crossings += model_step::located_segment(model_, s, y);
+  }
+  return crossings;
+}
+
+void BearingsRealization::step() {
+  const auto index = static_cast<std::uint64_t>(n_) + 1;  // the normal of this step, as Realization's
+  if (index >= normals_first_ + kNormalChunk) refill_normals(normals_first_ + kNormalChunk);
+  const double z = normals_[index - normals_first_];
+  const double load1 = kernel::load_next<double>(load_, spec_.drift, spec_.sigma, z, h_, sqrt_h_);
+  crossings_ += advance(n_, load_, load1, y_);
+  load_ = load1;
+  ++n_;
+  if (!y_.allFinite()) {
+    std::ostringstream msg;
+    msg << "gear model (bearings) diverged: realization " << spec_.realization << " (mu " << spec_.mu
+        << ") has delta_m = " << model_.deflection(y_) << " m at t = " << time() << " s";
+    throw DivergenceError(msg.str(), 0, spec_.realization, time());
+  }
+}
+
+BearingsOutputs BearingsRealization::outputs() const {
+  const double t = time();
+  const double e = mesh_.transmission_error(t);
+  const double e_dot = (mesh_.transmission_error(t + h_) - e) / h_;
+  const double dm = model_.deflection(y_);
+  model_step::MeshPoint p{mesh_.stiffness(t), 0.0, 0.0, 0.0, e, e_dot};
+  const BearingParameters& b = model_.bearings();
+  using M = BearingsModel;
+  return {dm,
+          model_.deflection_rate(y_),
+          model_.mesh_force(model_step::branch_of(dm, e, gear_.in.backlash), y_, p),
+          b.stiffness * y_[M::kPinionX] + b.pinion_damping * y_[M::kPinionXDot],
+          b.stiffness * y_[M::kPinionY] + b.pinion_damping * y_[M::kPinionYDot],
+          b.stiffness * y_[M::kWheelX] + b.wheel_damping * y_[M::kWheelXDot],
+          b.stiffness * y_[M::kWheelY] + b.wheel_damping * y_[M::kWheelYDot]};
+}
+
+}  // namespace gear_dynamics
