@@ -13,6 +13,9 @@ simulate(files=(), set=(), mu=None, seed=None, realizations=2, deterministic=Tru
     S1 and stochastic realizations into numpy arrays, bit for bit gear_run's numbers.
 config_dir() -> str
     The folder the defaults are read from.
+read_batch(folders, series=False) -> Batch
+    A Monte Carlo batch folder (or its shards) through the package's reader: runs and their
+    statistics as numpy columns (Batch.frame() for a pandas DataFrame), series on request.
 
 Units are SI throughout (m, m/s, m/s^2, s; d in m s^-1/2).
 """
@@ -23,7 +26,7 @@ import yaml as _yaml
 from gear_dynamics._core import ConfigError, config_dir  # noqa: F401
 from gear_dynamics import _core
 
-__all__ = ["ConfigError", "config", "config_dir", "simulate", "Simulation"]
+__all__ = ["ConfigError", "BatchReadError", "config", "config_dir", "simulate", "Simulation", "read_batch", "Batch"]
 
 
 def _listed(value):
@@ -91,3 +94,55 @@ def simulate(files=(), set=(), mu=None, seed=None, realizations=2, deterministic
     out = _core.simulate(_listed(files), _sets(set), mu, seed, int(realizations), bool(deterministic),
                          float(rate))
     return Simulation(out, summary=Simulation(out["summary"]))
+
+
+class Batch(dict):
+    """What read_batch() returns: a dict with attribute access.
+
+    runs: columns of the runs, one entry per usable bag: name, kind ("S1", "phase",
+        "stochastic"), mu, index (realization or phase member), point (study point),
+        center_distance [m s^-1/2], steady_state_time, steady_state_time_fine [s],
+        reached_steady_state (0/1), final_delta [m], final_delta_dot [m/s], final_phi [m/s^2]
+    snapshot_times (times,) [s]; snapshot_delta, snapshot_delta_dot (runs, times) [m], [m/s]
+    series: {run name: {t, delta, delta_dot, phi}} of the runs asked for
+    folders, expected_runs, skipped [(file, reason)], missing [run or note]
+    axes, points: the study grid (axis 0 is gear_pair.friction_coefficient)
+    config_text: the batch's model configuration as YAML
+    """
+
+    def __getattr__(self, name):
+        try:
+            return self[name]
+        except KeyError:
+            raise AttributeError(name) from None
+
+    def frame(self):
+        """The runs as a pandas DataFrame (needs pandas), one row per run."""
+        import pandas
+        return pandas.DataFrame(self["runs"])
+
+
+def read_batch(folders, series=False):
+    """Reads Monte Carlo batch folders (one or several shards of one batch) with the package's own
+    reader: the manifests' checks, bags left out with their reason, runs missing.
+
+    folders: a folder or a list of folders.
+    series: False (none), True (every recorded run) or a list of run names: their /gear/state
+        series into Batch.series.
+    Raises BatchReadError (an OSError) when the batch cannot be read at all.
+    """
+    from gear_dynamics import _batch
+    if isinstance(series, (bool, int)):
+        all_series, names = bool(series), []
+    else:
+        all_series, names = False, _listed(series)
+    out = _batch.read_batch(_listed(folders), all_series, names)
+    return Batch(out, runs={k: v for k, v in out["runs"].items()})
+
+
+def __getattr__(name):
+    # BatchReadError from the ROS-side module, loaded only when asked for.
+    if name == "BatchReadError":
+        from gear_dynamics._batch import BatchReadError
+        return BatchReadError
+    raise AttributeError(name)
