@@ -13,6 +13,9 @@ simulate(files=(), set=(), mu=None, seed=None, realizations=2, deterministic=Tru
     S1 and stochastic realizations into numpy arrays, bit for bit gear_run's numbers.
 config_dir() -> str
     The folder the defaults are read from.
+tooth_pair_stiffness(pinion_tooth=0, wheel_tooth=0, files=(), set=(), points=101) -> dict
+    One tooth pair's stiffness by the potential-energy method along the line of action, a crack
+    or spall of the configuration included (the mesh stiffness of a cracked tooth).
 read_batch(folders, series=False) -> Batch
     A Monte Carlo batch folder (or its shards) through the package's reader: runs and their
     statistics as numpy columns (Batch.frame() for a pandas DataFrame), series on request.
@@ -26,7 +29,7 @@ import yaml as _yaml
 from gear_dynamics._core import ConfigError, config_dir  # noqa: F401
 from gear_dynamics import _core
 
-__all__ = ["ConfigError", "BatchReadError", "config", "config_dir", "simulate", "Simulation", "read_batch", "Batch"]
+__all__ = ["ConfigError", "BatchReadError", "config", "config_dir", "simulate", "Simulation", "tooth_pair_stiffness", "read_batch", "Batch"]
 
 
 def _listed(value):
@@ -94,6 +97,22 @@ def simulate(files=(), set=(), mu=None, seed=None, realizations=2, deterministic
     out = _core.simulate(_listed(files), _sets(set), mu, seed, int(realizations), bool(deterministic),
                          float(rate))
     return Simulation(out, summary=Simulation(out["summary"]))
+
+
+def tooth_pair_stiffness(pinion_tooth=0, wheel_tooth=0, files=(), set=(), points=101, fillet_foundation=True):
+    """The stiffness of pinion tooth `pinion_tooth` meshing with wheel tooth `wheel_tooth` by the
+    potential-energy method (doc/model.md section 3) for the configured gear, its root crack
+    (gear_pair.crack_*) and spall included, at `points` contact points evenly over the line of
+    action [x_a, x_e].
+
+    files, set: the configuration as for simulate(). fillet_foundation=False leaves out the
+    fillet foundation's compliance (the known overestimate).
+    Returns a dict: x [m] from C1 along the line of action, stiffness [N/m], the compliance terms
+    hertz, bending, shear, axial, foundation [m/N] (pinion and wheel summed), x_a, x_e and
+    base_pitch [m].
+    """
+    return _core.tooth_pair_stiffness(_listed(files), _sets(set), int(pinion_tooth), int(wheel_tooth), int(points),
+                                      bool(fillet_foundation))
 
 
 class Batch(dict):

@@ -16,6 +16,8 @@
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
 #include "gear_dynamics/engine/simulation.hpp"
+#include "gear_dynamics/model/gear_pair.hpp"
+#include "gear_dynamics/model/tooth_stiffness.hpp"
 #include "../../src/tools/cli.hpp"
 
 namespace py = pybind11;
@@ -168,6 +170,46 @@ py::dict simulate(const std::vector<std::string>& files, const std::vector<std::
   return out;
 }
 
+// The potential-energy stiffness of one tooth pair along the line of action (model/tooth_stiffness.hpp)
+// for the configured gear, its crack and spall included: x over [x_a, x_e] at `points` points.
+py::dict tooth_pair_stiffness(const std::vector<std::string>& files, const std::vector<std::string>& sets,
+                              int pinion_tooth, int wheel_tooth, int points, bool fillet_foundation) {
+  if (points < 2) throw std::invalid_argument("points = " + std::to_string(points) + ": must be >= 2");
+  const gd::ModelConfig pc = gd::parse_config(model_root(files, sets, std::nullopt, std::nullopt));
+  const gd::GearPair gear = gd::derive(pc.gear);
+  gd::PotentialEnergyOptions options;
+  options.fillet_foundation = fillet_foundation;
+  const gd::ToothPairStiffness pair(gear, options);
+  const auto n = static_cast<py::ssize_t>(points);
+  py::array_t<double> x(n), k(n), hertz(n), bending(n), shear(n), axial(n), foundation(n);
+  auto mx = x.mutable_unchecked<1>(), mk = k.mutable_unchecked<1>(), mh = hertz.mutable_unchecked<1>(),
+       mb = bending.mutable_unchecked<1>(), ms = shear.mutable_unchecked<1>(), ma = axial.mutable_unchecked<1>(),
+       mf = foundation.mutable_unchecked<1>();
+  for (py::ssize_t i = 0; i < n; ++i) {
+    const double xi = gear.x_a + (gear.x_e - gear.x_a) * static_cast<double>(i) / static_cast<double>(n - 1);
+    const gd::PairCompliance c = pair.compliance(xi, pinion_tooth, wheel_tooth);
+    mx(i) = xi;
+    mk(i) = 1.0 / c.total();
+    mh(i) = c.hertz;
+    mb(i) = c.bending[0] + c.bending[1];
+    ms(i) = c.shear[0] + c.shear[1];
+    ma(i) = c.axial[0] + c.axial[1];
+    mf(i) = c.foundation[0] + c.foundation[1];
+  }
+  py::dict out;
+  out["x"] = x;
+  out["stiffness"] = k;
+  out["hertz"] = hertz;
+  out["bending"] = bending;
+  out["shear"] = shear;
+  out["axial"] = axial;
+  out["foundation"] = foundation;
+  out["x_a"] = gear.x_a;
+  out["x_e"] = gear.x_e;
+  out["base_pitch"] = gear.base_pitch;
+  return out;
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_core, m) {
@@ -181,4 +223,7 @@ PYBIND11_MODULE(_core, m) {
   m.def("simulate", &simulate, py::arg("files"), py::arg("sets"), py::arg("mu"), py::arg("seed"),
         py::arg("realizations"), py::arg("deterministic"), py::arg("rate"),
         "Runs S1 and realizations as gear_run does; a dict of numpy arrays.");
+  m.def("tooth_pair_stiffness", &tooth_pair_stiffness, py::arg("files"), py::arg("sets"), py::arg("pinion_tooth"),
+        py::arg("wheel_tooth"), py::arg("points"), py::arg("fillet_foundation"),
+        "One tooth pair's potential-energy stiffness along the line of action.");
 }

@@ -170,3 +170,24 @@ def test_no_memory_growth_over_many_calls():
     # 4 MiB allows the allocator's own slack.
     assert growth < 4096, growth
     assert s.delta.shape == (4, 201)
+
+
+def test_tooth_pair_stiffness_hertz_and_crack():
+    healthy = gear_dynamics.tooth_pair_stiffness(points=41)
+    c = gear_dynamics.config()["gear_pair"]
+    # Hertz's compliance of two steel teeth (Yang & Lin): 4 (1 - nu^2) / (pi E L), the same at every x.
+    hertz = 4 * (1 - c["poisson_ratio"] ** 2) / (np.pi * c["youngs_modulus"] * c["face_width"])
+    np.testing.assert_allclose(healthy["hertz"], hertz, rtol=1e-14)
+    terms = sum(healthy[k] for k in ("hertz", "bending", "shear", "axial", "foundation"))
+    np.testing.assert_allclose(1 / terms, healthy["stiffness"], rtol=1e-14)  # the terms in series
+    assert healthy["x"][0] == healthy["x_a"] and healthy["x"][-1] == pytest.approx(healthy["x_e"], rel=1e-15)
+    crack = {"gear_pair.mesh_stiffness": "potential_energy", "gear_pair.crack_gear": "pinion"}
+    shallow = gear_dynamics.tooth_pair_stiffness(points=41, set=dict(crack, **{"gear_pair.crack_depth": 0.5e-3}))
+    deep = gear_dynamics.tooth_pair_stiffness(points=41, set=dict(crack, **{"gear_pair.crack_depth": 1.5e-3}))
+    # A crack takes section from the tooth: the pair is softer everywhere, the deeper crack more so;
+    # the Hertz term does not see it.
+    assert np.all(shallow["stiffness"] < healthy["stiffness"]) and np.all(deep["stiffness"] < shallow["stiffness"])
+    np.testing.assert_array_equal(deep["hertz"], healthy["hertz"])
+    # Another tooth of the pinion is not cracked.
+    other = gear_dynamics.tooth_pair_stiffness(points=41, pinion_tooth=1, set=dict(crack, **{"gear_pair.crack_depth": 1.5e-3}))
+    np.testing.assert_array_equal(other["stiffness"], healthy["stiffness"])
