@@ -16,6 +16,8 @@ config_dir() -> str
 tooth_pair_stiffness(pinion_tooth=0, wheel_tooth=0, files=(), set=(), points=101) -> dict
     One tooth pair's stiffness by the potential-energy method along the line of action, a crack
     or spall of the configuration included (the mesh stiffness of a cracked tooth).
+spectrum(x, sample_rate, segment=8192, overlap=0.5) -> dict
+    Welch's one-sided power spectral density of a series, as gear_analyze computes it.
 read_batch(folders, series=False) -> Batch
     A Monte Carlo batch folder (or its shards) through the package's reader: runs and their
     statistics as numpy columns (Batch.frame() for a pandas DataFrame), series on request.
@@ -29,7 +31,7 @@ import yaml as _yaml
 from gear_dynamics._core import ConfigError, config_dir  # noqa: F401
 from gear_dynamics import _core
 
-__all__ = ["ConfigError", "BatchReadError", "config", "config_dir", "simulate", "Simulation", "tooth_pair_stiffness", "read_batch", "Batch"]
+__all__ = ["ConfigError", "BatchReadError", "config", "config_dir", "simulate", "Simulation", "spectrum", "tooth_pair_stiffness", "read_batch", "Batch"]
 
 
 def _listed(value):
@@ -113,6 +115,18 @@ def tooth_pair_stiffness(pinion_tooth=0, wheel_tooth=0, files=(), set=(), points
     """
     return _core.tooth_pair_stiffness(_listed(files), _sets(set), int(pinion_tooth), int(wheel_tooth), int(points),
                                       bool(fillet_foundation))
+
+
+def spectrum(x, sample_rate, segment=8192, overlap=0.5):
+    """Welch's one-sided power spectral density of the series `x` sampled at `sample_rate` [Hz]:
+    periodic Hann segments of `segment` samples overlapping by the fraction `overlap`, each
+    segment's mean removed (scipy.signal.welch's defaults with nperseg=segment).
+
+    Returns a dict: frequency [Hz] (0 .. sample_rate/2), density [unit^2/Hz], resolution [Hz],
+    enbw (the window's equivalent noise bandwidth) [Hz], segments. Raises ValueError when x is
+    shorter than one segment or an option is out of range.
+    """
+    return _core.spectrum([float(v) for v in x], float(sample_rate), int(segment), float(overlap))
 
 
 class Batch(dict):

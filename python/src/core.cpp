@@ -16,6 +16,7 @@
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
 #include "gear_dynamics/engine/simulation.hpp"
+#include "gear_dynamics/maths/spectrum.hpp"
 #include "gear_dynamics/model/gear_pair.hpp"
 #include "gear_dynamics/model/tooth_stiffness.hpp"
 #include "../../src/tools/cli.hpp"
@@ -210,6 +211,24 @@ py::dict tooth_pair_stiffness(const std::vector<std::string>& files, const std::
   return out;
 }
 
+py::dict spectrum(const std::vector<double>& x, double sample_rate, std::size_t segment, double overlap) {
+  gd::WelchOptions o;
+  o.segment = segment;
+  o.overlap = overlap;
+  gd::Psd p;
+  {
+    py::gil_scoped_release release;
+    p = gd::welch_psd(x, sample_rate, o);
+  }
+  py::dict out;
+  out["frequency"] = py::array_t<double>(static_cast<py::ssize_t>(p.frequency.size()), p.frequency.data());
+  out["density"] = py::array_t<double>(static_cast<py::ssize_t>(p.density.size()), p.density.data());
+  out["resolution"] = p.resolution;
+  out["enbw"] = p.enbw;
+  out["segments"] = p.segments;
+  return out;
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_core, m) {
@@ -223,6 +242,8 @@ PYBIND11_MODULE(_core, m) {
   m.def("simulate", &simulate, py::arg("files"), py::arg("sets"), py::arg("mu"), py::arg("seed"),
         py::arg("realizations"), py::arg("deterministic"), py::arg("rate"),
         "Runs S1 and realizations as gear_run does; a dict of numpy arrays.");
+  m.def("spectrum", &spectrum, py::arg("x"), py::arg("sample_rate"), py::arg("segment"), py::arg("overlap"),
+        "Welch's one-sided power spectral density (maths/spectrum.hpp).");
   m.def("tooth_pair_stiffness", &tooth_pair_stiffness, py::arg("files"), py::arg("sets"), py::arg("pinion_tooth"),
         py::arg("wheel_tooth"), py::arg("points"), py::arg("fillet_foundation"),
         "One tooth pair's potential-energy stiffness along the line of action.");

@@ -191,3 +191,19 @@ def test_tooth_pair_stiffness_hertz_and_crack():
     # Another tooth of the pinion is not cracked.
     other = gear_dynamics.tooth_pair_stiffness(points=41, pinion_tooth=1, set=dict(crack, **{"gear_pair.crack_depth": 1.5e-3}))
     np.testing.assert_array_equal(other["stiffness"], healthy["stiffness"])
+
+
+def test_spectrum_equals_scipy_welch():
+    from scipy import signal
+    rng = np.random.default_rng(3)
+    fs = 10000.0
+    t = np.arange(20000) / fs
+    x = np.sin(2 * np.pi * 440.0 * t) + 0.1 * rng.standard_normal(t.size) + 2.0
+    p = gear_dynamics.spectrum(x, fs, segment=1024, overlap=0.5)
+    f, d = signal.welch(x, fs, window="hann", nperseg=1024, noverlap=512, detrend="constant", scaling="density")
+    np.testing.assert_allclose(p["frequency"], f, rtol=1e-15)
+    # Two FFTs of the same segments (kissfft, pocketfft): rounding only, 1e-9 of the peak.
+    np.testing.assert_allclose(p["density"], d, rtol=1e-9, atol=1e-9 * d.max())
+    assert abs(f[np.argmax(p["density"])] - 440.0) <= fs / 1024
+    with pytest.raises(ValueError):
+        gear_dynamics.spectrum(x[:100], fs, segment=1024)
