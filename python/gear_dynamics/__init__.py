@@ -18,6 +18,10 @@ tooth_pair_stiffness(pinion_tooth=0, wheel_tooth=0, files=(), set=(), points=101
     or spall of the configuration included (the mesh stiffness of a cracked tooth).
 spectrum(x, sample_rate, segment=8192, overlap=0.5) -> dict
     Welch's one-sided power spectral density of a series, as gear_analyze computes it.
+poincare_section(files=(), set=(), mu=None, transient=0.2) -> dict
+    S1's Poincare section once per mesh period at mesh phase 0.
+lyapunov(files=(), set=(), mu=None, duration=1.2, orthonormalise_every=100) -> dict
+    S1's Lyapunov spectrum (lambda1, lambda2) and the Jacobian's mean trace.
 read_batch(folders, series=False) -> Batch
     A Monte Carlo batch folder (or its shards) through the package's reader: runs and their
     statistics as numpy columns (Batch.frame() for a pandas DataFrame), series on request.
@@ -31,7 +35,7 @@ import yaml as _yaml
 from gear_dynamics._core import ConfigError, config_dir  # noqa: F401
 from gear_dynamics import _core
 
-__all__ = ["ConfigError", "BatchReadError", "config", "config_dir", "simulate", "Simulation", "spectrum", "tooth_pair_stiffness", "read_batch", "Batch"]
+__all__ = ["ConfigError", "BatchReadError", "config", "config_dir", "simulate", "Simulation", "spectrum", "tooth_pair_stiffness", "poincare_section", "lyapunov", "read_batch", "Batch"]
 
 
 def _listed(value):
@@ -127,6 +131,28 @@ def spectrum(x, sample_rate, segment=8192, overlap=0.5):
     shorter than one segment or an option is out of range.
     """
     return _core.spectrum([float(v) for v in x], float(sample_rate), int(segment), float(overlap))
+
+
+def poincare_section(files=(), set=(), mu=None, transient=0.2):
+    """S1's Poincare section (doc/nonlinear-dynamics.md): (delta, delta_dot) once per mesh period
+    at mesh phase 0, from `transient` [s] to run.duration, as gear_analyze poincare and the
+    batch's /gear/poincare take it (interpolated between grid points unless on one).
+
+    files, set, mu: the configuration as for simulate(). Returns a dict: t [s], delta [m],
+    delta_dot [m/s], on_grid (0/1), mesh_period [s].
+    """
+    return _core.poincare(_listed(files), _sets(set), mu, float(transient))
+
+
+def lyapunov(files=(), set=(), mu=None, duration=1.2, orthonormalise_every=100):
+    """S1's Lyapunov spectrum over [0, duration] by QR of the tangent map (doc/nonlinear-dynamics.md),
+    in gear_analyze's norm (delta in units of b, delta_dot of sqrt(2 Phi b)).
+
+    Returns a dict: exponents (lambda1, lambda2) [1/s], trace (the time average of the Jacobian's
+    trace, lambda1 + lambda2 by Liouville up to RK4's own dissipation) [1/s], and the running
+    estimate of lambda1: time [s], running [1/s].
+    """
+    return _core.lyapunov(_listed(files), _sets(set), mu, float(duration), int(orthonormalise_every))
 
 
 class Batch(dict):

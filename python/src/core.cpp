@@ -16,6 +16,9 @@
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
 #include "gear_dynamics/engine/simulation.hpp"
+#include "gear_dynamics/dynamics/lyapunov.hpp"
+#include "gear_dynamics/dynamics/poincare.hpp"
+#include "gear_dynamics/dynamics/system.hpp"
 #include "gear_dynamics/maths/spectrum.hpp"
 #include "gear_dynamics/model/gear_pair.hpp"
 #include "gear_dynamics/model/tooth_stiffness.hpp"
@@ -229,6 +232,67 @@ py::dict spectrum(const std::vector<double>& x, double sample_rate, std::size_t 
   return out;
 }
 
+// S1 of the configuration as one deterministic lane (dynamics/system.hpp).
+gd::GearLaneSpec s1_lane(const gd::ModelConfig& c) {
+  return gd::GearLaneSpec{c.gear, c.friction_coefficient, c.load.initial_mean, c.initial};
+}
+
+py::array_t<double> vec(const std::vector<double>& v) {
+  return py::array_t<double>(static_cast<py::ssize_t>(v.size()), v.data());
+}
+
+// S1's Poincare section at mesh phase 0 (as gear_analyze poincare and the batch's /gear/poincare).
+py::dict poincare(const std::vector<std::string>& files, const std::vector<std::string>& sets, std::optional<double> mu,
+                  double transient) {
+  const gd::ModelConfig c = gd::parse_config(model_root(files, sets, mu, std::nullopt));
+  if (!(transient >= 0 && transient <= c.run.duration))
+    throw std::invalid_argument("transient = " + std::to_string(transient) + " s is out of range; allowed [0, run.duration = " +
+                                std::to_string(c.run.duration) + "] s");
+  const gd::GearPair g = gd::derive(c.gear);
+  std::vector<gd::SectionState> st;
+  {
+    py::gil_scoped_release release;
+    gd::GearLanes sys({s1_lane(c)}, c.run.time_step);
+    st = gd::poincare_section(sys, {gd::mesh_period(g), gd::first_mesh_period_start(g), transient, c.run.duration, {}});
+  }
+  std::vector<double> t, d, v, on;
+  for (const auto& p : st) {
+    t.push_back(p.time);
+    d.push_back(p.x[0]);
+    v.push_back(p.x[1]);
+    on.push_back(p.on_grid ? 1.0 : 0.0);
+  }
+  py::dict out;
+  out["t"] = vec(t);
+  out["delta"] = vec(d);
+  out["delta_dot"] = vec(v);
+  out["on_grid"] = vec(on);
+  out["mesh_period"] = gd::mesh_period(g);
+  return out;
+}
+
+// S1's Lyapunov spectrum (lambda1, lambda2) by QR of the tangent map (dynamics/lyapunov.hpp).
+py::dict lyapunov(const std::vector<std::string>& files, const std::vector<std::string>& sets, std::optional<double> mu,
+                  double duration, std::int64_t orthonormalise_every) {
+  const gd::ModelConfig c = gd::parse_config(model_root(files, sets, mu, std::nullopt));
+  if (!(duration > 0)) throw std::invalid_argument("duration = " + std::to_string(duration) + " s: must be > 0");
+  gd::SpectrumOptions o;
+  o.duration = duration;
+  o.orthonormalise_every = orthonormalise_every;
+  o.scale = {c.gear.backlash, std::sqrt(2.0 * std::abs(c.load.initial_mean) * c.gear.backlash)};  // gear_analyze's
+  gd::LyapunovSpectrum r;
+  {
+    py::gil_scoped_release release;
+    r = gd::lyapunov_spectrum(s1_lane(c), c.run.time_step, o);
+  }
+  py::dict out;
+  out["exponents"] = std::vector<double>{r.exponent[0], r.exponent[1]};
+  out["trace"] = r.trace;
+  out["time"] = vec(r.time);
+  out["running"] = vec(r.running);
+  return out;
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_core, m) {
@@ -244,6 +308,10 @@ PYBIND11_MODULE(_core, m) {
         "Runs S1 and realizations as gear_run does; a dict of numpy arrays.");
   m.def("spectrum", &spectrum, py::arg("x"), py::arg("sample_rate"), py::arg("segment"), py::arg("overlap"),
         "Welch's one-sided power spectral density (maths/spectrum.hpp).");
+  m.def("poincare", &poincare, py::arg("files"), py::arg("sets"), py::arg("mu"), py::arg("transient"),
+        "S1's Poincare section at mesh phase 0.");
+  m.def("lyapunov", &lyapunov, py::arg("files"), py::arg("sets"), py::arg("mu"), py::arg("duration"),
+        py::arg("orthonormalise_every"), "S1's Lyapunov spectrum.");
   m.def("tooth_pair_stiffness", &tooth_pair_stiffness, py::arg("files"), py::arg("sets"), py::arg("pinion_tooth"),
         py::arg("wheel_tooth"), py::arg("points"), py::arg("fillet_foundation"),
         "One tooth pair's potential-energy stiffness along the line of action.");

@@ -207,3 +207,32 @@ def test_spectrum_equals_scipy_welch():
     assert abs(f[np.argmax(p["density"])] - 440.0) <= fs / 1024
     with pytest.raises(ValueError):
         gear_dynamics.spectrum(x[:100], fs, segment=1024)
+
+
+def test_poincare_section_matches_simulate():
+    # S1 at mesh phase 0: at the grid points of the section, the state equals simulate's S1 there
+    # (GearLanes steps with the Ensemble's arithmetic, bit for bit for a lane without noise).
+    cfg = {"run.duration": 0.05, "run.window": 0.05, "run.snapshot_times": []}
+    sec = gear_dynamics.poincare_section(set=cfg, transient=0.0)
+    sim = gear_dynamics.simulate(set=cfg, realizations=0, rate=400000.0)  # every grid step
+    assert len(sec["t"]) > 0
+    np.testing.assert_allclose(np.diff(sec["t"]), sec["mesh_period"], rtol=1e-9)
+    on = sec["on_grid"] == 1
+    idx = np.rint(sec["t"][on] / sim.time_step).astype(int)
+    np.testing.assert_array_equal(sec["delta"][on], sim.delta[0][idx])
+    # Off the grid: interpolated between the neighbouring grid states, so within their range.
+    for t, d in zip(sec["t"][~on], sec["delta"][~on]):
+        i = int(t / sim.time_step)
+        lo, hi = sorted((sim.delta[0][i], sim.delta[0][i + 1]))
+        assert lo - 1e-12 <= d <= hi + 1e-12
+
+
+def test_lyapunov_exponents_sum_to_the_mean_trace():
+    r = gear_dynamics.lyapunov(duration=0.2)
+    c = gear_dynamics.config()
+    assert c["run"]["time_step"] == 2.5e-6
+    # Liouville up to RK4's dissipation, at most omega_max^6 h^5 / 72 = 0.13 1/s at h = 2.5 us
+    # (test_dynamics_lyapunov.cpp derives the bound).
+    assert abs(sum(r["exponents"]) - r["trace"]) <= 0.13
+    assert r["trace"] < 0 and r["exponents"][0] >= r["exponents"][1]
+    assert len(r["running"]) == len(r["time"]) > 0
