@@ -131,7 +131,7 @@ def test_gil_released_while_the_engine_runs():
     th.start()
     try:
         start = time.monotonic()
-        gear_dynamics.simulate(set={"run.duration": 2.0, "run.window": 0.05}, realizations=7, rate=0)
+        gear_dynamics.simulate(set={"run.duration": 10.0, "run.window": 0.05}, realizations=7, rate=0)
         elapsed = time.monotonic() - start
     finally:
         stop.set()
