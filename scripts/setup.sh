@@ -26,6 +26,7 @@ GD_PACKAGES=(
   libros-rosgraph-msgs-dev libsensor-msgs-dev python3-sensor-msgs ros-robot-state-publisher
   libeigen3-dev librandom123-dev libtbb-dev libyaml-cpp-dev libgtest-dev libbenchmark-dev libboost-dev libcli11-dev
   python3-matplotlib python3-numpy python3-scipy
+  pybind11-dev python3-pybind11 python3-yaml python3-setuptools
 )
 
 gd_install() {
