@@ -200,9 +200,11 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
     ROS_INFO("gear_simulator: real_time_factor 0: holding at t = 0 for %g s (simulator.subscriber_wait) so that "
              "subscribers still discovering the node (rosbag record -a, started first) get the run from t = 0",
              settings_.subscriber_wait);
+    waiting_ = true;
     subscriber_wait_timer_ = nh_.createWallTimer(
         ros::WallDuration(settings_.subscriber_wait),
         [this](const ros::WallTimerEvent&) {
+          if (!waiting_.exchange(false)) return;  // a service call took over
           resend_start_ = true;
           Request r;
           r.paused = false;
@@ -323,12 +325,14 @@ void GearSimulator::reconfigure(RefusingConfig& config, uint32_t /*level*/) {
 }
 
 bool GearSimulator::pause(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
+  waiting_ = false;
   Request r;
   r.paused = true;
   return sim_->request(r).ok;
 }
 
 bool GearSimulator::unpause(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
+  waiting_ = false;
   resend_start_ = true;
   Request r;
   r.paused = false;
@@ -342,6 +346,7 @@ bool GearSimulator::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&)
 }
 
 bool GearSimulator::step(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+  waiting_ = false;
   resend_start_ = true;
   Request r;
   r.step = true;
