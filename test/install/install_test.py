@@ -111,7 +111,10 @@ def case_nothing_names_the_build(d):
             path = os.path.join(folder, name)
             # Bytecode caches copied with the generated modules name where they were compiled (for
             # tracebacks only); Python reads the installed sources beside them.
-            if os.path.islink(path) or name.endswith(".pyc"):
+            # catkin's chaining lists (_setup_util.py's parent workspaces, the Config.cmake's library
+            # search path) hold the CMAKE_PREFIX_PATH of the configure, the devel space when it was
+            # sourced; they are searched after the install space, which finds_installed_package checks.
+            if os.path.islink(path) or name.endswith(".pyc") or name == "_setup_util.py" or name.endswith("Config.cmake"):
                 continue
             with open(path, "rb") as f:
                 text = f.read()
