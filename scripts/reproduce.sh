@@ -3,15 +3,33 @@
 # the default Monte Carlo batch, then the aggregator's report (launch/paper.launch).
 #   GD_OUTPUT  batch folder (default: batches/paper in the repository); re-running resumes it
 #   GD_REPORT  report folder (default: report/ in the repository)
-# Extra arguments go to roslaunch, e.g. realizations:=1000, or study:=noise (a study of config/studies/).
+# Extra arguments go to roslaunch, e.g. realizations:=1000, or study:=noise (a study of config/studies/)
+# or study:=my_study.yaml (a file of your own).
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/setup.sh"
 
-# study:=NAME runs config/studies/NAME.yaml (doc/studies.md) into batches/study-NAME and report/study-NAME.
+# study:=NAME runs config/studies/NAME.yaml (doc/studies.md) into batches/study-NAME and report/study-NAME;
+# study:=PATH (containing / or ending in .yaml) runs your own study file, named after its base name.
 study=
-for a in "$@"; do case $a in study:=*) study=${a#study:=} ;; esac; done
+own=
+args=()
+for a in "$@"; do
+  case $a in
+    study:=*)
+      study=${a#study:=}
+      if [[ $study == */* || $study == *.yaml ]]; then
+        [ -f "$study" ] || { echo "reproduce: no study file $study" >&2; exit 2; }
+        own=$(cd "$(dirname "$study")" && pwd)/$(basename "$study")  # roslaunch runs elsewhere
+        a="study:=$own"
+        study=$(basename "$study" .yaml)
+      fi ;;
+  esac
+  args+=("$a")
+done
+set -- "${args[@]+"${args[@]}"}"
 if [ -n "$study" ]; then
-  [ -f "$GD_REPO/config/studies/$study.yaml" ] || { echo "reproduce: no study config/studies/$study.yaml" >&2; exit 2; }
+  [ -n "$own" ] || [ -f "$GD_REPO/config/studies/$study.yaml" ] ||
+    { echo "reproduce: no study config/studies/$study.yaml (or give a path to your own file)" >&2; exit 2; }
   batch=${GD_OUTPUT:-$GD_REPO/batches/study-$study}
   report=${GD_REPORT:-$GD_REPO/report/study-$study}
 else

@@ -27,6 +27,9 @@ const Section<SimulatorSettings>& simulator_section() {
                "where the run stops, a whole number of time steps; 0 = run on forever")
           .key("loop", GD_MEMBER(loop), "at t_end start over (as ~reset) instead of stopping; needs t_end > 0")
           .key("paused", GD_MEMBER(paused), "start paused (then ~unpause or ~step)")
+          .key("subscriber_wait", GD_MEMBER(subscriber_wait), closed(0, 60), "s",
+               "at real_time_factor 0, wall time held at t = 0 before running, for subscribers still "
+               "discovering the node (rosbag record -a); 0 = start at once")
           .key("load_input", GD_MEMBER(load_input),
                "where Phi comes from: sde (load.yaml's SDE), external (the load_command topic, held), "
                "external_plus_noise (the command plus the SDE's increments)")

@@ -96,6 +96,7 @@ struct ReportFiles {
   void md_rank_tests(std::ostream& r) const;
   void md_table3(std::ostream& r) const;
   void md_table4(std::ostream& r) const;
+  void md_interval_warning(std::ostream& r) const;
   void md_steady_state(std::ostream& r) const;
   void md_pdfs(std::ostream& r) const;
   void md_figures(std::ostream& r) const;
@@ -324,6 +325,29 @@ void ReportFiles::md_table4(std::ostream& r) const {
       << " | " << (p ? fixed(p->p_delta_dot, 0) : "–") << " | " << (p ? inside(p->p_delta_dot / 100, m.delta_dot_in_interval) : "")
       << " |\n";
   }
+  md_interval_warning(r);
+}
+
+// report.md: the intervals are the paper's for its load by default; where the median of delta(T)
+// or delta_dot(T) lies outside them, the probabilities say little about this load, and it is said.
+void ReportFiles::md_interval_warning(std::ostream& r) const {
+  std::string off;
+  for (const MuAnalysis& m : a.mu) {
+    if (m.stochastic_runs == 0) continue;
+    const auto outside = [](double x, const auto& iv) { return x < iv.lo || x > iv.hi; };
+    if (outside(m.final_delta.median, s.delta_interval))
+      off += "\n- μ = " + fixed(m.mu, 2) + ": median δ(T) = " + fixed(m.final_delta.median * U, 4) + " mm, outside " +
+             interval_text(s.delta_interval, 4) + " mm";
+    if (outside(m.final_delta_dot.median, s.delta_dot_interval))
+      off += "\n- μ = " + fixed(m.mu, 2) + ": median δ̇(T) = " + fixed(m.final_delta_dot.median * U, 3) +
+             " mm/s, outside " + interval_text(s.delta_dot_interval, 1) + " mm/s";
+  }
+  if (!off.empty())
+    r << "\n**Warning: the safety intervals look off for this run's load.** The medians below lie outside "
+         "them, so these probabilities measure the distance from the intervals rather than the safety of this "
+         "load; set `analysis.delta_interval` and `analysis.delta_dot_interval` for it (the aggregator's "
+         "`config` overlay, or config/aggregator.yaml):\n"
+      << off << "\n";
 }
 
 // report.md: Time to steady state t_ss.

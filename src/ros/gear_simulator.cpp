@@ -131,10 +131,15 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
              "(paced against it at real_time_factor > 0, its messages stamped in the owner's time; it waits while "
              "the owner is paused, and starts again from the owner's present when /clock goes back)");
   // Publishes t = 0 and the run info at once.
+  // At real_time_factor 0 the run would be over before a recorder started first has found the
+  // node: it starts paused and runs after simulator.subscriber_wait, its t = 0 state sent again then.
+  hold_start_ = settings_.real_time_factor == 0.0 && !settings_.paused && settings_.subscriber_wait > 0.0;
+  SimulatorSettings start = settings_;
+  start.paused = start.paused || hold_start_;
   if (following_)
-    sim_.emplace(config_, settings_, static_cast<LiveSink&>(*this), ros_clock_);
+    sim_.emplace(config_, start, static_cast<LiveSink&>(*this), ros_clock_);
   else
-    sim_.emplace(config_, settings_, static_cast<LiveSink&>(*this));
+    sim_.emplace(config_, start, static_cast<LiveSink&>(*this));
 
   pause_srv_ = private_nh_.advertiseService("pause", &GearSimulator::pause, this);
   unpause_srv_ = private_nh_.advertiseService("unpause", &GearSimulator::unpause, this);
@@ -191,6 +196,22 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
   if (settings_.load_input != "sde")
     ROS_INFO("gear_simulator: load input '%s' from %s (std_msgs/Float64, m/s^2), applied at the next step",
              settings_.load_input.c_str(), load_sub_.getTopic().c_str());
+  if (hold_start_) {
+    ROS_INFO("gear_simulator: real_time_factor 0: holding at t = 0 for %g s (simulator.subscriber_wait) so that "
+             "subscribers still discovering the node (rosbag record -a, started first) get the run from t = 0",
+             settings_.subscriber_wait);
+    waiting_ = true;
+    subscriber_wait_timer_ = nh_.createWallTimer(
+        ros::WallDuration(settings_.subscriber_wait),
+        [this](const ros::WallTimerEvent&) {
+          if (!waiting_.exchange(false)) return;  // a service call took over
+          resend_start_ = true;
+          Request r;
+          r.paused = false;
+          sim_->request(r);
+        },
+        /*oneshot=*/true);
+  }
   sim_->start();
 }
 
@@ -304,12 +325,14 @@ void GearSimulator::reconfigure(RefusingConfig& config, uint32_t /*level*/) {
 }
 
 bool GearSimulator::pause(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
+  waiting_ = false;
   Request r;
   r.paused = true;
   return sim_->request(r).ok;
 }
 
 bool GearSimulator::unpause(std_srvs::Empty::Request&, std_srvs::Empty::Response&) {
+  waiting_ = false;
   resend_start_ = true;
   Request r;
   r.paused = false;
@@ -323,6 +346,7 @@ bool GearSimulator::reset(std_srvs::Empty::Request&, std_srvs::Empty::Response&)
 }
 
 bool GearSimulator::step(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+  waiting_ = false;
   resend_start_ = true;
   Request r;
   r.step = true;
@@ -430,7 +454,7 @@ void GearSimulator::publish(const LiveSample& s) {
   if (resend_start_.exchange(false) && unsent_start_ && s.step > 0) hold(*unsent_start_, false);
   unsent_start_.reset();
   hold(s, true);
-  if (std::exchange(first_publish_, false) && settings_.paused) unsent_start_ = s;
+  if (std::exchange(first_publish_, false) && (settings_.paused || hold_start_)) unsent_start_ = s;
   if (held_.size() >= kBurst || now - held_since_ >= kBurstWall) flush();
 }
 

@@ -1,6 +1,7 @@
 // The per-mu analysis and the report on synthetic run records whose statistics are known.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -217,4 +218,42 @@ TEST(Report, WritesTablesWithPaperValuesAndEveryCsv) {
   }
   EXPECT_NEAR(integral, 1.0 - a.mu[0].delta_pdf.fraction_outside(), 1e-9);
   fs::remove_all(dir);
+}
+
+// The safety intervals are the paper's for its load: the report warns, naming mu and the median,
+// when the median of delta(T) or delta_dot(T) lies outside them, and is silent when both lie inside.
+TEST(Report, WarnsWhenTheMedianIsOutsideTheSafetyIntervals) {
+  gd::BatchInputs in;
+  in.folders = {"/tmp/batch"};
+  in.runs = synthetic();
+  in.expected_runs = in.runs.size();
+  const gd::BatchAnalysis plain = gd::analyse(in.runs, gd::AnalysisSettings{});
+  // Intervals around every mu's medians (a margin of 1 um and 1 mm/s) and one just above them all.
+  double d_lo = 1, d_hi = -1, v_lo = 1e9, v_hi = -1e9;
+  for (const gd::MuAnalysis& m : plain.mu) {
+    d_lo = std::min(d_lo, m.final_delta.median), d_hi = std::max(d_hi, m.final_delta.median);
+    v_lo = std::min(v_lo, m.final_delta_dot.median), v_hi = std::max(v_hi, m.final_delta_dot.median);
+  }
+  const auto report_with = [&](gd::Interval delta, gd::Interval delta_dot) {
+    gd::AnalysisSettings s;
+    s.delta_interval = delta;
+    s.delta_dot_interval = delta_dot;
+    const gd::BatchAnalysis a = gd::analyse(in.runs, s);
+    const fs::path dir = fs::temp_directory_path() / ("gd_interval_test_" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    gd::write_report(dir.string(), in, a);
+    std::ifstream md(dir / "report.md");
+    const std::string text((std::istreambuf_iterator<char>(md)), std::istreambuf_iterator<char>());
+    fs::remove_all(dir);
+    return text;
+  };
+  const std::string inside = report_with({d_lo - 1e-6, d_hi + 1e-6}, {v_lo - 1e-3, v_hi + 1e-3});
+  EXPECT_EQ(inside.find("safety intervals look off"), std::string::npos);
+  const std::string above = report_with({d_hi + 1e-6, d_hi + 2e-6}, {v_lo - 1e-3, v_hi + 1e-3});
+  EXPECT_NE(above.find("safety intervals look off"), std::string::npos);
+  EXPECT_NE(above.find("median δ(T)"), std::string::npos);
+  EXPECT_EQ(above.find("median δ̇(T)"), std::string::npos);
+  const std::string slow = report_with({d_lo - 1e-6, d_hi + 1e-6}, {v_hi + 1e-3, v_hi + 2e-3});
+  EXPECT_NE(slow.find("median δ̇(T)"), std::string::npos);
+  EXPECT_EQ(slow.find("median δ(T)"), std::string::npos);
 }

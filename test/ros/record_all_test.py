@@ -4,6 +4,8 @@ a node started paused, then unpaused, as a ROS user records a run.
 
 - `rosbag record -a`: every state by header.seq (0 .. N-1, no gap) with t = 0, 1 ms, ..., t_end;
   every Float64 topic and state_batch complete too (the node paces what it sends).
+- `rosbag record -a` started first and the node not paused: the node holds t = 0 for
+  simulator.subscriber_wait, and the bag has every state from t = 0.
 - `rosbag record NS/state_batch` alone: every state from t = 0 to t_end, in far fewer messages
   (bursts of up to 64 states), with the batches' header.seq without a gap.
 """
@@ -90,6 +92,31 @@ class RecordAll(unittest.TestCase):
         launch.wait(timeout=40)
         print('%s: t_end %g s in %.2f s of wall time' % (name, t_end, wall))
         return bag
+
+    def test_record_all_started_first_unpaused(self):
+        """`rosbag record -a` started first, then a launch at real_time_factor 0 that is not paused: the
+        node holds t = 0 for simulator.subscriber_wait while the recorder (polling the master once a
+        second) finds it, so the bag has every state from t = 0 without a gap."""
+        t_end = 2.0
+        count = int(t_end / PERIOD) + 1
+        bag_path = os.path.join(self.tmp, 'first.bag')
+        recorder = self.start('rosbag', 'record', '-a', '-O', bag_path, '__name:=recorder_first')
+        deadline = time.time() + 30.0
+        while '/recorder_first' not in rosnode.get_node_names():
+            self.assertLess(time.time(), deadline, 'the recorder did not start')
+            time.sleep(0.1)
+        launch = self.start('roslaunch', 'gear_dynamics', 'simulate.launch', 'real_time_factor:=0',
+                            't_end:=%g' % t_end)
+        rospy.wait_for_message('/gear/final_state', GearState, timeout=120.0)
+        time.sleep(1.0)  # the recorder drains its queue
+        os.killpg(recorder.pid, signal.SIGINT)
+        recorder.wait(timeout=30)
+        os.killpg(launch.pid, signal.SIGINT)
+        launch.wait(timeout=40)
+        with rosbag.Bag(bag_path) as bag:
+            states = [(m.header.seq, round(m.t, 9)) for _, m, _ in bag.read_messages(topics=['/gear/state'])]
+        self.assertEqual([t for _, t in states], grid(count), 'the bag does not hold every state from t = 0')
+        self.assertEqual([s for s, _ in states], list(range(count)), 'gaps in header.seq')
 
     def batch_states(self, bag):
         seqs, times = [], []

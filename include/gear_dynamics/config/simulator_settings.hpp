@@ -31,6 +31,9 @@ struct SimulatorSettings {
   double t_end = 0.0;             // [s]; 0 = run until stopped
   bool loop = false;              // start over at t_end instead of stopping
   bool paused = false;            // start paused
+  // [wall s] at real_time_factor 0 (not paused): held at t = 0 this long first, so that a recorder
+  // started before the node (rosbag record -a polls the master once a second) connects in time.
+  double subscriber_wait = 2.0;
   // Where Phi comes from: "sde" (load.yaml's SDE), "external" (the load_command topic, held), or
   // "external_plus_noise" (the command plus the SDE's increments); see gear_dynamics/live/.
   std::string load_input = "sde";

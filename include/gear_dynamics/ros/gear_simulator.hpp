@@ -163,6 +163,9 @@ class GearSimulator : private LiveSink {
   // first gets every state from t = 0.
   std::optional<LiveSample> unsent_start_;
   bool first_publish_ = true;
+  bool hold_start_ = false;               // paused for simulator.subscriber_wait at real_time_factor 0
+  ros::WallTimer subscriber_wait_timer_;  // ends that wait
+  std::atomic<bool> waiting_{false};      // still in it: no ~pause, ~unpause or ~step since
   std::atomic<bool> resend_start_{false};
 
   // The recording (stepping thread; diagnostics read it).
