@@ -14,10 +14,11 @@
 
 namespace gear_dynamics::dispatch {
 
-// One grid step of an Ensemble's padded lanes (Ensemble::step's arrays, lanes a multiple of the
-// packet), with the step's normals z.
+// Grid step n of an Ensemble's padded lanes (Ensemble::step's arrays, lanes a multiple of the
+// packet), with the step's normals z. The step's plan is made inside the variant (inlined there).
 struct EnsembleStep {
-  const StepPlan* plan;
+  const MeshSchedule* mesh;
+  std::int64_t n;
   double h, sqrt_h, backlash, alpha, q3;
   double *delta, *velocity, *load;
   const double *mu, *sigma, *drift, *z;

@@ -96,10 +96,10 @@ void Ensemble::refill_normals(std::uint64_t first_index) {
 void Ensemble::step() {
   const auto index = static_cast<std::uint64_t>(n_) + 1;  // normal of this step
   if (index >= normals_first_ + kNormalChunk) refill_normals(normals_first_ + kNormalChunk);
-  const StepPlan plan = mesh_.plan(n_);
   // The lanes' arithmetic runs in the instruction-set variant chosen for the process
   // (src/engine/dispatched/ensemble_step.cpp).
-  const dispatch::EnsembleStep lanes{&plan,
+  const dispatch::EnsembleStep lanes{&mesh_,
+                                     n_,
                                      h_,
                                      std::sqrt(h_),
                                      gear_.in.backlash,

@@ -138,8 +138,7 @@ TEST(InstructionSet, EnsembleStepVariantsAgree) {
   const auto run = [&](const dispatch::Kernels& k) {
     Lanes s = start;
     for (int n = 0; n < kSteps; ++n) {
-      const gd::StepPlan plan = mesh.plan(n);
-      const dispatch::EnsembleStep step{&plan, h, std::sqrt(h), b, gear.damping_coefficient, gear.q3,
+      const dispatch::EnsembleStep step{&mesh, n, h, std::sqrt(h), b, gear.damping_coefficient, gear.q3,
                                         s.d.data(), s.v.data(), s.load.data(), s.mu.data(), s.sigma.data(),
                                         s.drift.data(), &z[static_cast<std::size_t>(n) * kLanes], kLanes};
       if (!k.ensemble_step(step)) ADD_FAILURE() << "not finite at step " << n;

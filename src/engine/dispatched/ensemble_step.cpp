@@ -13,7 +13,7 @@ namespace gear_dynamics::GD_ISA_NAMESPACE {
 bool ensemble_step(const dispatch::EnsembleStep& s) {
   constexpr int kPacket = Ensemble::kPacket;
   using Packet = Eigen::Array<double, kPacket, 1>;
-  const StepPlan& plan = *s.plan;
+  const StepPlan plan = s.mesh->plan(s.n);
   const double h = s.h, sqrt_h = s.sqrt_h, b = s.backlash, alpha = s.alpha, q3 = s.q3;
   Packet sum = Packet::Zero();  // NaN and inf propagate through it: one finiteness test per step
 
