@@ -25,6 +25,14 @@ struct EnsembleStep {
   std::ptrdiff_t lanes;
 };
 
+// Grid step n of a Realization's one lane (engine/realization.hpp), with its normal z.
+struct RealizationStep {
+  const MeshSchedule* mesh;
+  std::int64_t n;
+  double h, sqrt_h, backlash, alpha, q3, mu, drift, sigma, z;
+  double *delta, *velocity, *load;
+};
+
 // A NormalStream's key and counter word, and a NormalLanes' per lane.
 struct StreamKey {
   std::uint32_t key0, key1, seed_high;
@@ -38,6 +46,7 @@ struct Kernels {
   InstructionSet isa;
   // Steps the lanes; false when the state is no longer finite (the caller finds the lane).
   bool (*ensemble_step)(const EnsembleStep&);
+  void (*realization_step)(const RealizationStep&);
   void (*philox)(const StreamKey&, std::uint64_t first_pair, std::uint64_t* w0, std::uint64_t* w1);
   void (*normal_block)(const StreamKey&, std::uint64_t first_pair, double* out);
   void (*normal_lanes_block)(const LaneKeys&, std::uint64_t first_pair, double* out, std::ptrdiff_t stride);

@@ -1,5 +1,6 @@
 // Ensemble::step's lanes (engine/ensemble.hpp): the kernel (engine/rk4_kernel.hpp) on the padded
-// arrays, in packets of Ensemble::kPacket, compiled once per instruction set.
+// arrays, in packets of Ensemble::kPacket; and Realization::step's one lane (the same kernel on
+// doubles). Compiled once per instruction set.
 #include "variant.hpp"
 
 #include <cmath>
@@ -44,6 +45,17 @@ bool ensemble_step(const dispatch::EnsembleStep& s) {
   for (; p + 2 * kPacket <= s.lanes; p += 2 * kPacket) step_lanes(std::integral_constant<int, 2 * kPacket>{}, p);
   if (p < s.lanes) step_lanes(std::integral_constant<int, kPacket>{}, p);
   return std::isfinite(sum.sum());
+}
+
+void realization_step(const dispatch::RealizationStep& s) {
+  const StepPlan plan = s.mesh->plan(s.n);
+  const double load0 = *s.load;
+  const double load1 = kernel::load_next<double>(load0, s.drift, s.sigma, s.z, s.h, s.sqrt_h);
+  double d = *s.delta, v = *s.velocity;
+  kernel::rk4_step<double>(plan, s.h, s.backlash, s.alpha, s.q3, s.mu, load0, load1, d, v);
+  *s.delta = d;
+  *s.velocity = v;
+  *s.load = load1;
 }
 
 }  // namespace gear_dynamics::GD_ISA_NAMESPACE
