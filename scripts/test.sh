@@ -8,7 +8,7 @@ source "$(dirname "${BASH_SOURCE[0]}")/setup.sh"
 # for test/remote, tf2's Python API for the rostest simulator_joint_tf. Their services are not started by the install (a policy-rc.d that denies them is
 # in place while it runs, if the machine has none); the tests start private daemons and say why
 # they skip if these are missing.
-GD_PACKAGES=(slurm-wlm munge openssh-server python3-tf2-ros python3-pytest)
+GD_PACKAGES=(slurm-wlm munge openssh-server python3-tf2-ros python3-pytest qemu-user)  # qemu-user: test/isa
 gd_policy=""
 if [ ! -e /usr/sbin/policy-rc.d ] && [ "$(id -u)" -eq 0 ]; then
   printf '#!/bin/sh\nexit 101\n' > /usr/sbin/policy-rc.d && chmod 755 /usr/sbin/policy-rc.d && gd_policy=1

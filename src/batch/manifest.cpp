@@ -178,6 +178,7 @@ std::string manifest_text(const Manifest& m) {
   out << YAML::BeginMap;
   out << YAML::Key << "format" << YAML::Value << m.format();
   out << YAML::Key << "package_version" << YAML::Value << m.package_version;
+  if (!m.instruction_set.empty()) out << YAML::Key << "instruction_set" << YAML::Value << m.instruction_set;
   out << YAML::Key << "numbers" << YAML::Value << m.numbers;
   out << YAML::Key << "complete" << YAML::Value << m.complete;
   out << YAML::Key << "config" << YAML::Value << m.config;
@@ -234,6 +235,7 @@ Manifest read_manifest(const std::string& path) {
       fail("format is '" + format + "', expected '" + kManifestFormat + "' or '" + kManifestFormatStudy + "'");
     m.study = format == kManifestFormatStudy;
     m.package_version = root["package_version"] ? field<std::string>(root, "package_version", "", fail) : "";
+    m.instruction_set = root["instruction_set"] ? field<std::string>(root, "instruction_set", "", fail) : "";
     m.numbers = root["numbers"] ? field<int>(root, "numbers", "", fail) : 1;  // a manifest without it predates it
     m.complete = root["complete"] && field<bool>(root, "complete", "", fail);
     m.config = root["config"];

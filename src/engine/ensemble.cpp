@@ -1,16 +1,13 @@
 #include "gear_dynamics/engine/ensemble.hpp"
 
-#include "gear_dynamics/engine/rk4_kernel.hpp"
+#include "dispatch.hpp"
 
 #include <cmath>
 #include <sstream>
-#include <type_traits>
 
 namespace gear_dynamics {
 
 namespace {
-
-using Packet = Eigen::Array<double, Ensemble::kPacket, 1>;
 
 int padded(std::size_t lanes) {
   return static_cast<int>((lanes + Ensemble::kPacket - 1) / Ensemble::kPacket) * Ensemble::kPacket;
@@ -102,38 +99,26 @@ void Ensemble::refill_normals(std::uint64_t first_index) {
 void Ensemble::step() {
   const auto index = static_cast<std::uint64_t>(n_) + 1;  // normal of this step
   if (index >= normals_first_ + kNormalChunk) refill_normals(normals_first_ + kNormalChunk);
-  const StepPlan plan = mesh_.plan(n_);
-  const double b = gear_.in.backlash, alpha = gear_.damping_coefficient, q3 = gear_.q3;
-  const double sqrt_h = std::sqrt(h_);
-  const double* z_col = &normals_(0, static_cast<Eigen::Index>(index - normals_first_));
-  Packet sum = Packet::Zero();  // NaN and inf propagate through it: one finiteness test per step
-
-  // N lanes at a time: N = 4 kPacket (a default block of 32 lanes) runs four packets' dependency
-  // chains side by side in each statement (the kernel is latency-bound: more chains hide more of
-  // it), what is left two packets or one at a time.
-  const auto step_lanes = [&](auto lanes, Eigen::Index p) GD_KERNEL_INLINE_LAMBDA {
-    constexpr int N = decltype(lanes)::value;
-    using Lanes = Eigen::Array<double, N, 1>;
-    Lanes d = delta_.segment<N>(p);
-    Lanes v = velocity_.segment<N>(p);
-    const Lanes load0 = load_.segment<N>(p);
-    const Lanes mu = mu_.segment<N>(p);
-    const Lanes z = Eigen::Map<const Lanes>(z_col + p);
-    // The kernel shared with the one-lane path (Realization): the same operations per lane.
-    const Lanes load1 = kernel::load_next<Lanes>(load0, drift_.segment<N>(p), sigma_.segment<N>(p), z, h_, sqrt_h);
-    kernel::rk4_step<Lanes>(plan, h_, b, alpha, q3, mu, load0, load1, d, v);
-    delta_.segment<N>(p) = d;
-    velocity_.segment<N>(p) = v;
-    load_.segment<N>(p) = load1;
-    const Lanes dv = d + v;
-    for (int k = 0; k < N; k += kPacket) sum += dv.template segment<kPacket>(k);  // packet by packet, in order
-  };
-  Eigen::Index p = 0;
-  for (; p + 4 * kPacket <= delta_.size(); p += 4 * kPacket) step_lanes(std::integral_constant<int, 4 * kPacket>{}, p);
-  for (; p + 2 * kPacket <= delta_.size(); p += 2 * kPacket) step_lanes(std::integral_constant<int, 2 * kPacket>{}, p);
-  if (p < delta_.size()) step_lanes(std::integral_constant<int, kPacket>{}, p);
+  // The lanes' arithmetic runs in the instruction-set variant chosen for the process
+  // (src/engine/dispatched/ensemble_step.cpp).
+  const dispatch::EnsembleStep lanes{&mesh_,
+                                     n_,
+                                     h_,
+                                     std::sqrt(h_),
+                                     gear_.in.backlash,
+                                     gear_.damping_coefficient,
+                                     gear_.q3,
+                                     delta_.data(),
+                                     velocity_.data(),
+                                     load_.data(),
+                                     mu_.data(),
+                                     sigma_.data(),
+                                     drift_.data(),
+                                     &normals_(0, static_cast<Eigen::Index>(index - normals_first_)),
+                                     delta_.size()};
+  const bool finite = dispatch::kernels().ensemble_step(lanes);
   ++n_;
-  if (!std::isfinite(sum.sum())) report_divergence();
+  if (!finite) report_divergence();
 }
 
 void Ensemble::report_divergence() const {

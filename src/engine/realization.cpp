@@ -1,6 +1,8 @@
 #include "gear_dynamics/engine/realization.hpp"
 
 #include <sstream>
+
+#include "dispatch.hpp"
 #include <stdexcept>
 
 namespace gear_dynamics {
@@ -16,6 +18,21 @@ Realization::Realization(const GearPair& gear, double time_step, const InitialSt
   if (!spec_.stochastic && (spec_.sigma != 0.0 || spec_.load_sd != 0.0))
     throw std::invalid_argument("Realization: a lane without a random stream needs sigma = 0 and load_sd = 0");
   reset();
+}
+
+void Realization::step() {
+  const auto index = static_cast<std::uint64_t>(n_) + 1;  // normal of this step
+  if (index >= normals_first_ + kNormalChunk) refill_normals(normals_first_ + kNormalChunk);
+  double d = delta_, v = velocity_;
+  // The lane's arithmetic in the process's instruction-set variant (src/engine/dispatched/).
+  dispatch::kernels().realization_step({&mesh_, n_, h_, sqrt_h_, gear_.in.backlash, gear_.damping_coefficient,
+                                        gear_.q3, spec_.mu, spec_.drift, spec_.sigma,
+                                        normals_[index - normals_first_], &d, &v, &load_});
+  delta_ = d;
+  velocity_ = v;
+  ++n_;
+  // Ensemble's test: the sum first (one test per step), the states only when it is not finite.
+  if (!std::isfinite(d + v) && !(std::isfinite(d) && std::isfinite(v))) report_divergence();
 }
 
 void Realization::reset() {

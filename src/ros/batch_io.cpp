@@ -8,6 +8,8 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "gear_dynamics/engine/instruction_set.hpp"
+
 namespace gear_dynamics {
 
 namespace fs = std::filesystem;
@@ -177,6 +179,7 @@ void write_manifest(const Study& study, const BatchSettings& settings,
   Manifest m;
   m.study = study.swept();
   m.package_version = package_version();
+  m.instruction_set = to_string(active_instruction_set());
   m.numbers = kNumbersGeneration;
   m.complete = complete;
   m.config = manifest_config(study.base, settings);

@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "gear_dynamics/engine/instruction_set.hpp"
 #include "gear_dynamics/ros/conversions.hpp"
 #include "gear_dynamics/ros/stop_signal.hpp"
 
@@ -101,6 +102,8 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
       settings_(load_settings(private_nh, config_.run.time_step)),
       reconfigure_server_(reconfigure_mutex_, private_nh),
       updater_(nh, private_nh) {
+  // The normal generator's variant (the one-lane step is portable code); refuses a bad GEAR_DYNAMICS_ISA.
+  ROS_INFO("gear_simulator: %s", instruction_set_description().c_str());
   state_ = CountedPublisher::advertise<GearState>(nh_, "state", kQueue);
   state_batch_ = CountedPublisher::advertise<GearStateBatch>(nh_, "state_batch", kQueue);
   joint_states_ = CountedPublisher::advertise<sensor_msgs::JointState>(nh_, "joint_states", kQueue);

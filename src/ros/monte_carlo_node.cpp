@@ -10,6 +10,7 @@
 #include <mutex>
 #include <thread>
 
+#include "gear_dynamics/engine/instruction_set.hpp"
 #include "gear_dynamics/montecarlo/batch.hpp"
 #include "gear_dynamics/ros/batch_io.hpp"
 #include "gear_dynamics/ros/conversions.hpp"
@@ -36,6 +37,7 @@ int MonteCarloNode::init() {
     study_ = make_study(model_, settings_);  // every point validated before anything runs
     runs_ = shard_runs(plan_runs(study_, settings_), settings_.shard_index, settings_.shard_count);
     todo_ = prepare_folder(study_, settings_, runs_);
+    ROS_INFO("gear_monte_carlo: %s", instruction_set_description().c_str());  // refuses a bad GEAR_DYNAMICS_ISA
   } catch (const std::exception& e) {
     if (const int sig = stop_signal()) {  // what failed was interrupted: a stop, not bad input
       ROS_WARN("gear_monte_carlo: stopped by %s while starting, before any run", stop_signal_name());

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "gear_dynamics/config/config.hpp"
+#include "gear_dynamics/engine/instruction_set.hpp"
 #include "gear_dynamics/config/parameters.hpp"
 #include "gear_dynamics/config/simulator_settings.hpp"
 #include "gear_dynamics/config/sweep.hpp"
@@ -265,9 +266,9 @@ int main(int argc, char** argv) try {
     const auto results = gd::simulate(ensemble, pc.run, recorder);
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-    std::printf("# mu %.4g, seed %llu, h %g s, T %g s, window %g s, %zu runs in %.3f s wall\n",
+    std::printf("# mu %.4g, seed %llu, h %g s, T %g s, window %g s, %zu runs in %.3f s wall, %s\n",
                 pc.friction_coefficient, static_cast<unsigned long long>(pc.seed), pc.run.time_step,
-                pc.run.duration, pc.run.window, results.size(), wall);
+                pc.run.duration, pc.run.window, results.size(), wall, gd::instruction_set_description().c_str());
     for (std::size_t i = 0; i < results.size(); ++i) {
       const auto& r = results[i];
       std::printf("%s: d = %.6f mm s^-1/2, t_ss = %.6f s (%s), delta(T) = %.6f mm, delta_dot(T) = %.4f mm/s, Phi(T) = %.3f mm/s^2\n",

@@ -11,6 +11,7 @@
 #include <map>
 #include <sstream>
 
+#include "gear_dynamics/engine/instruction_set.hpp"
 #include "gear_dynamics/ros/batch_io.hpp"
 
 namespace gd = gear_dynamics;
@@ -149,6 +150,10 @@ TEST(BatchBags, OneLz4BagPerRunWithRunInfoFirstSeriesAndSummaryLast) {
   const YAML::Node m = YAML::LoadFile((dir.path / "manifest.yaml").string());
   EXPECT_EQ(m["format"].as<std::string>(), gd::kManifestFormat);
   EXPECT_EQ(m["package_version"].as<std::string>(), GEAR_DYNAMICS_VERSION);
+  // The writing process's instruction set, and the reader returns it.
+  EXPECT_EQ(m["instruction_set"].as<std::string>(), gd::to_string(gd::active_instruction_set()));
+  EXPECT_EQ(gd::read_manifest((dir.path / "manifest.yaml").string()).instruction_set,
+            gd::to_string(gd::active_instruction_set()));
   EXPECT_TRUE(m["complete"].as<bool>());
   EXPECT_EQ(m["shard_index"].as<int>(), 0);
   EXPECT_EQ(m["shard_count"].as<int>(), 1);

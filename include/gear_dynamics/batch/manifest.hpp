@@ -41,6 +41,9 @@ struct ManifestRun {
 struct Manifest {
   bool study = false;  // format 2: the grid below, a point per run
   std::string package_version;
+  // The instruction set of the engine's hot paths in the process that wrote it (engine/
+  // instruction_set.hpp): a record only, every one gives the same bags. Empty: not recorded.
+  std::string instruction_set;
   int numbers = 0;        // the numbers generation of its bags (engine/ensemble.hpp); 1 if absent
   bool complete = false;  // every listed run's bag was written
   YAML::Node config;      // the model plus the monte_carlo settings (manifest_config)

@@ -10,7 +10,6 @@
 
 #include "gear_dynamics/engine/ensemble.hpp"
 #include "gear_dynamics/engine/normal_stream.hpp"
-#include "gear_dynamics/engine/rk4_kernel.hpp"
 #include "gear_dynamics/model/gear_pair.hpp"
 #include "gear_dynamics/model/mesh_schedule.hpp"
 
@@ -24,7 +23,7 @@ class Realization {
               std::uint64_t seed);
 
   // Advances by one grid step. Throws DivergenceError (lane 0) on a non-finite state.
-  GD_KERNEL_INLINE void step();
+  void step();
   // Back to t = 0 and the start of the random stream: the run repeats bit for bit.
   void reset();
 
@@ -67,24 +66,5 @@ class Realization {
   double normals_[kNormalChunk] = {};
   std::uint64_t normals_first_ = 0;
 };
-
-// Inline: the live loop steps one realization at a time, and a call per step would show.
-GD_KERNEL_INLINE void Realization::step() {
-  const auto index = static_cast<std::uint64_t>(n_) + 1;  // normal of this step
-  if (index >= normals_first_ + kNormalChunk) refill_normals(normals_first_ + kNormalChunk);
-  const StepPlan plan = mesh_.plan(n_);
-  const double z = normals_[index - normals_first_];
-  const double load0 = load_;
-  const double load1 = kernel::load_next<double>(load0, spec_.drift, spec_.sigma, z, h_, sqrt_h_);
-  double d = delta_, v = velocity_;
-  kernel::rk4_step<double>(plan, h_, gear_.in.backlash, gear_.damping_coefficient, gear_.q3, spec_.mu, load0,
-                           load1, d, v);
-  delta_ = d;
-  velocity_ = v;
-  load_ = load1;
-  ++n_;
-  // Ensemble's test: the sum first (one test per step), the states only when it is not finite.
-  if (!std::isfinite(d + v) && !(std::isfinite(d) && std::isfinite(v))) report_divergence();
-}
 
 }  // namespace gear_dynamics
