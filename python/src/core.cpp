@@ -33,28 +33,6 @@ namespace {
 // run, then the exception is restored with the GIL held.
 struct PythonInterrupt {};
 
-// gear_run's handling of run.snapshot_times after run.duration: dropped with one notice (a Python
-// warning here), so that a short run set with run.duration=... works without restating the list.
-void drop_late_snapshots(YAML::Node& root) {
-  YAML::Node run = root["run"];
-  double duration = 0.0;
-  if (!run || !run["snapshot_times"] || !run["snapshot_times"].IsSequence() ||
-      !gd::detail::as_number(run["duration"], duration))
-    return;
-  YAML::Node kept(YAML::NodeType::Sequence);
-  std::string dropped;
-  for (const YAML::Node& t : run["snapshot_times"]) {
-    double v = 0.0;
-    if (gd::detail::as_number(t, v) && v > duration) dropped += (dropped.empty() ? "" : ", ") + gd::detail::show(t);
-    else kept.push_back(t);
-  }
-  if (dropped.empty()) return;
-  std::ostringstream text;
-  text << "snapshot times " << dropped << " s lie after run.duration = " << duration << " s: dropped";
-  if (PyErr_WarnEx(PyExc_UserWarning, text.str().c_str(), 1) < 0) throw py::error_already_set();
-  run["snapshot_times"] = kept;
-}
-
 YAML::Node model_root(const std::vector<std::string>& files, const std::vector<std::string>& sets,
                       std::optional<double> mu, std::optional<long long> seed) {
   gd::tools::ModelOptions o;
@@ -63,7 +41,9 @@ YAML::Node model_root(const std::vector<std::string>& files, const std::vector<s
   o.mu = mu;
   YAML::Node root = gd::tools::model_yaml(o);
   if (seed) root["run"]["seed"] = *seed;
-  drop_late_snapshots(root);
+  // gear_run's notice of snapshot times after run.duration, as a Python warning.
+  if (const std::string notice = gd::tools::drop_late_snapshots(root); !notice.empty())
+    if (PyErr_WarnEx(PyExc_UserWarning, notice.c_str(), 1) < 0) throw py::error_already_set();
   return root;
 }
 

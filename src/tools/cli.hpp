@@ -103,4 +103,27 @@ inline YAML::Node model_yaml(const ModelOptions& o, const std::vector<std::strin
   return root;
 }
 
+// Drops run.snapshot_times that lie after run.duration, so that a short run set with
+// --set run.duration=... works without restating the snapshot list; returns the notice to give
+// ("" when nothing was dropped). gear_run prints it, the Python module raises it as a warning.
+inline std::string drop_late_snapshots(YAML::Node& root) {
+  YAML::Node run = root["run"];
+  double duration = 0.0;
+  if (!run || !run["snapshot_times"] || !run["snapshot_times"].IsSequence() ||
+      !detail::as_number(run["duration"], duration))
+    return "";
+  YAML::Node kept(YAML::NodeType::Sequence);
+  std::string dropped;
+  for (const YAML::Node& t : run["snapshot_times"]) {
+    double v = 0.0;
+    if (detail::as_number(t, v) && v > duration) dropped += (dropped.empty() ? "" : ", ") + detail::show(t);
+    else kept.push_back(t);
+  }
+  if (dropped.empty()) return "";
+  run["snapshot_times"] = kept;
+  std::ostringstream text;
+  text << "snapshot times " << dropped << " s lie after run.duration = " << duration << " s: dropped";
+  return text.str();
+}
+
 }  // namespace gear_dynamics::tools

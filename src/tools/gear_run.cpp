@@ -95,27 +95,6 @@ Options parse(int argc, char** argv) {
   return o;
 }
 
-// Drops run.snapshot_times that lie after run.duration, with one notice, so that a short run set
-// with --set run.duration=... works without restating the snapshot list.
-void drop_late_snapshots(YAML::Node& root) {
-  YAML::Node run = root["run"];
-  double duration = 0.0;
-  if (!run || !run["snapshot_times"] || !run["snapshot_times"].IsSequence() ||
-      !gd::detail::as_number(run["duration"], duration))
-    return;
-  YAML::Node kept(YAML::NodeType::Sequence);
-  std::string dropped;
-  for (const YAML::Node& t : run["snapshot_times"]) {
-    double v = 0.0;
-    if (gd::detail::as_number(t, v) && v > duration) dropped += (dropped.empty() ? "" : ", ") + gd::detail::show(t);
-    else kept.push_back(t);
-  }
-  if (dropped.empty()) return;
-  std::cerr << "gear_run: snapshot times " << dropped << " s lie after run.duration = " << duration
-            << " s: dropped\n";
-  run["snapshot_times"] = kept;
-}
-
 // The bearings model (doc/model.md §11), one realization after the other: the CSV's columns of the
 // torsional model with delta = delta_m, then the torsional coordinate, the mesh force and the
 // bearing forces; the summary line, then the RMS over the window of F_m and the bearing forces.
@@ -203,7 +182,8 @@ int main(int argc, char** argv) try {
     std::printf("valid\n");
     return 0;
   }
-  drop_late_snapshots(root);
+  if (const std::string notice = gd::tools::drop_late_snapshots(root); !notice.empty())
+    std::cerr << "gear_run: " << notice << "\n";
   const gd::ModelConfig cfg = gd::parse_config(root);
 
   // The grid of --sweep (one point without it): every point validated before anything runs.
