@@ -431,8 +431,8 @@ LiveSample LiveSimulation::sample() const {
 void LiveSimulation::take_spectrum_sample(std::int64_t n) {
   const Realization& e = realization_;
   const double t = e.time();
-  spectrum_samples_.push(e.delta(), mesh_force(gear_, e.mesh().stiffness(t), e.delta() - e.mesh().transmission_error(t),
-                                               e.velocity()));
+  spectrum_samples_.push(e.delta(), mesh_force(gear_, e.mesh().stiffness(t), e.delta(), e.velocity(),
+                                               e.mesh().transmission_error(t), e.mesh().transmission_error_rate(t)));
   next_sample_ += spectrum_.sample_steps;
   if (n != next_update_) return;
   next_update_ += spectrum_.update_steps;

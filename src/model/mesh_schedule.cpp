@@ -31,6 +31,12 @@ double MeshSchedule::transmission_error(double t) const {
   return table_ ? table_->at(table_angle(angle(t))).error : 0.0;
 }
 
+double MeshSchedule::transmission_error_rate(double t) const {
+  if (!table_) return 0.0;
+  const double a = table_angle(angle(t));
+  return table_->error_slope(table_->piece_of(a), a) * speed_;
+}
+
 // The table's local angle of a, a billionth of a step past it: at a jump that falls on a sample
 // time (a mesh period is often a whole number of steps) the value after it, whatever the rounding
 // of a.

@@ -190,6 +190,14 @@ MeshTable::Values MeshTable::at(int piece, double a) const {
           lo.error + w * (hi.error - lo.error)};
 }
 
+double MeshTable::error_slope(int piece, double a) const {
+  const Piece& p = pieces_[piece];
+  const double width = (p.end - p.begin) / p.count;
+  const double u = std::min(std::max((a - p.begin) / (p.end - p.begin), 0.0), 1.0) * p.count;
+  const int k = std::min(static_cast<int>(u), p.count - 1);
+  return (values_[p.first + k + 1].error - values_[p.first + k].error) / width;
+}
+
 MeshTable::Values MeshTable::exact(int piece, double a) const {
   const Piece& p = pieces_[piece];
   const long m = static_cast<long>(std::floor(0.5 * (p.begin + p.end) / gear_.mesh_period_angle));

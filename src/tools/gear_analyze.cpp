@@ -338,10 +338,11 @@ int spectrum(const Options& o) {
     const std::int64_t N = c.run.steps(), n0 = std::llround(transient / h);
     for (std::int64_t n = 0; n <= N; ++n) {
       if (n >= n0 && (n - n0) % k == 0) {
-        const double K = e.mesh().stiffness(e.time()), err = e.mesh().transmission_error(e.time());
+        const double t = e.time(), K = e.mesh().stiffness(t), err = e.mesh().transmission_error(t),
+                     rate = e.mesh().transmission_error_rate(t);
         for (int l = 0; l < last - first; ++l) {
           delta[first + l].push_back(e.delta()[l]);
-          force[first + l].push_back(gd::mesh_force(g, K, e.delta()[l] - err, e.velocity()[l]));
+          force[first + l].push_back(gd::mesh_force(g, K, e.delta()[l], e.velocity()[l], err, rate));
         }
       }
       if (n < N) e.step();
@@ -748,9 +749,10 @@ int spectrum_of_bag(const Options& o) {
   in.delta.assign(1, {});
   in.force.assign(1, {});
   for (std::size_t i = first_after(b, transient); i < b.run.t.size(); ++i) {
-    const double e = schedule.transmission_error(b.run.t[i]);
+    const double t = b.run.t[i];
     in.delta[0].push_back(b.run.delta[i]);
-    in.force[0].push_back(gd::mesh_force(g, b.run.stiffness[i], b.run.delta[i] - e, b.run.delta_dot[i]));
+    in.force[0].push_back(gd::mesh_force(g, b.run.stiffness[i], b.run.delta[i], b.run.delta_dot[i],
+                                         schedule.transmission_error(t), schedule.transmission_error_rate(t)));
   }
   in.fs = 1.0 / b.period, in.fm = fm, in.transient = transient, in.duration = b.run.t.back();
   in.mu = c.friction_coefficient, in.k = static_cast<int>(std::lround(b.period / c.run.time_step));

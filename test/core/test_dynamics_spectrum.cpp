@@ -138,8 +138,8 @@ TEST(Spectrum, CrackedToothSidebandsAtThePinionRotation) {
     std::vector<double> force;
     for (int n = 0; n <= 400000; ++n) {
       if (n >= 160000 && n % 4 == 0)
-        force.push_back(gd::mesh_force(g, e.mesh().stiffness(e.time()), e.delta()[0] - e.mesh().transmission_error(e.time()),
-                                       e.velocity()[0]));
+        force.push_back(gd::mesh_force(g, e.mesh().stiffness(e.time()), e.delta()[0], e.velocity()[0],
+                                       e.mesh().transmission_error(e.time()), e.mesh().transmission_error_rate(e.time())));
       if (n < 400000) e.step();
     }
     const double fm = g.mesh_frequency(), fs = 1.0 / (4 * h);

@@ -281,3 +281,47 @@ TEST(MeshTable, InterpolationWithinATenthOfAPercent) {
   std::printf("table: %d pieces, %d nodes over %d mesh periods; largest interpolation error %.2e of K\n",
               t.pieces(), t.nodes(), t.mesh_periods(), worst);
 }
+
+// The reported mesh force of a gear with profile errors is the force the kernel damps with:
+// K g(delta - e) + alpha |g| (delta_dot - e_dot). Independently: e_dot as a forward difference of
+// e(t) over 1 ns (inside one node of the table, where e is a straight line, so only rounding
+// differs), and the force as -acceleration of the kernel at the state with load 0 and Q = 1.
+TEST(MeshTable, MeshForceDampsTheRelativeVelocity) {
+  gd::GearInputs in;
+  in.mesh_stiffness = gd::MeshStiffnessModel::kPotentialEnergy;  // shares vary: e varies within a piece
+  in.profile_errors.pinion = {4e-6, -3e-6, 0.0, 5e-6, -2e-6};
+  in.profile_errors.wheel = {1e-6, 0.0, -4e-6};
+  const gd::GearPair g = gd::derive(in);
+  const double h = 2.5e-6, dt = 1e-9;
+  gd::Ensemble e(g, h, {g.in.backlash + 2e-6, 0.0}, {gd::LaneSpec{0.04, 0.0, 0.0, 2000.0, 0.0, 0, false}}, 1);
+  int compared = 0, moving = 0;
+  double worst_rate = 0.0, worst_force = 0.0, largest_change = 0.0;
+  for (int n = 0; n < 40000; ++n) {
+    e.step();
+    if (n % 7 != 0) continue;
+    const double t = e.time(), K = e.mesh().stiffness(t), err = e.mesh().transmission_error(t);
+    const double rate = e.mesh().transmission_error_rate(t);
+    const double fd = (e.mesh().transmission_error(t + dt) - err) / dt;
+    const double d = e.delta()[0], v = e.velocity()[0];
+    const double force = gd::mesh_force(g, K, d, v, err, rate);
+    const double kernel = -gd::kernel::acceleration<double, double, true>(d, v, 0.0, K, 1.0, g.in.backlash,
+                                                                       g.damping_coefficient, err, fd);
+    // e ~ 1e-5 m over 1 ns: rounding of the difference ~ 1e-21 / 1e-9 = 1e-12 m/s; 1e-9 m/s allows
+    // a node boundary inside the nanosecond on a few samples, which the count below would show.
+    if (std::abs(rate - fd) > 1e-9) continue;
+    ++compared;
+    worst_rate = std::max(worst_rate, std::abs(rate - fd));
+    // Relative to the force scale K b: the two differ only by the fused roundings of the kernel.
+    worst_force = std::max(worst_force, std::abs(force - kernel) / (K * g.in.backlash));
+    if (rate != 0.0) ++moving;
+    largest_change = std::max(largest_change, std::abs(force - gd::mesh_force(g, K, d, v, err, 0.0)));
+  }
+  EXPECT_GT(compared, 5000) << "samples with the same slope on both sides of 1 ns";
+  // e moves only where two pairs share the load with changing shares (a quarter of the samples here).
+  EXPECT_GT(moving, compared / 10) << "samples where e moves";
+  EXPECT_LT(worst_force, 1e-12);
+  // The damper's e_dot term matters: without it the force differs by more than 1 mN somewhere.
+  EXPECT_GT(largest_change, 1e-3) << "largest |F(e_dot) - F(0)| [N]";
+  std::printf("%d samples, %d with e moving; largest |e_dot - fd| %.1e m/s, |F(e_dot) - F(0)| %.3e N\n",
+              compared, moving, worst_rate, largest_change);
+}

@@ -118,14 +118,16 @@ inline double mesh_period(const GearPair& gear) { return gear.mesh_period_angle 
 // every mesh period phi_n / Omega (doc/nonlinear-dynamics.md §3).
 double first_mesh_period_start(const GearPair& gear);
 
-// Mesh force F_c = K g(delta) + alpha |g(delta)| delta_dot [N] (doc/model.md §2, without the friction
-// factor), g(delta) = delta - clamp(delta, -b, b) the tooth deflection beyond the backlash; the
-// quantity whose spectrum gear_analyze and the live node's spectrum topic show. With a static
-// transmission error e the callers pass delta - e.
-inline double mesh_force(const GearPair& gear, double stiffness, double delta, double delta_dot) {
+// Mesh force F_c = K g(delta - e) + alpha |g| (delta_dot - e_dot) [N] (doc/model.md §2, without the
+// friction factor), g(x) = x - clamp(x, -b, b) the tooth deflection beyond the backlash, e and e_dot
+// the static transmission error and its rate (MeshSchedule): the force the kernel integrates, and
+// the quantity whose spectrum gear_analyze and the live node's spectrum topic show.
+inline double mesh_force(const GearPair& gear, double stiffness, double delta, double delta_dot, double error = 0.0,
+                         double error_rate = 0.0) {
   const double b = gear.in.backlash;
-  const double g = delta - std::min(std::max(delta, -b), b);  // as kernel::clamp
-  return stiffness * g + (gear.damping_coefficient * std::abs(g)) * delta_dot;
+  const double x = delta - error;
+  const double g = x - std::min(std::max(x, -b), b);  // as kernel::clamp
+  return stiffness * g + (gear.damping_coefficient * std::abs(g)) * (delta_dot - error_rate);
 }
 
 // Computes every derived quantity by doc/model.md's formulas. Does not validate (see config.hpp).

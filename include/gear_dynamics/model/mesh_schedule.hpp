@@ -44,6 +44,8 @@ class MeshSchedule {
   // K(t) [N/m] and e(t) [m]; on a table, the values just after t (after a jump at t).
   double stiffness(double t) const;
   double transmission_error(double t) const;
+  // de/dt at t [m/s], just after t: the e_dot with which the kernel damps delta_dot - e_dot.
+  double transmission_error_rate(double t) const;
   // K at the unwrapped pinion angle a = phi0 + Omega t, i.e. theta1 from the model's theta1 = 0.
   double stiffness_at_angle(double a) const;
   // The table behind a mesh that is not the paper's (null on the paper's).

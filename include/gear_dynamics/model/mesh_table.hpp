@@ -51,6 +51,8 @@ class MeshTable {
   // Linear interpolation in piece i at local angle a, taken inside the piece (its limit at an end).
   Values at(int piece, double a) const;
   Values at(double a) const { return at(piece_of(a), a); }
+  // de/da of that interpolation at a [m/rad]: the rate the kernel's straight-line e integrates with.
+  double error_slope(int piece, double a) const;
   // The model itself (no interpolation) at local angle a, on the side of piece i.
   Values exact(int piece, double a) const;
   std::vector<MeshContact> contacts(double a) const;
