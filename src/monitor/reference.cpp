@@ -188,6 +188,10 @@ double t2_score(const ReferenceBand& band, double t2) {
   return boost::math::quantile(boost::math::normal(), p);
 }
 
+bool Reference::covers(double load) const {
+  return !bands.empty() && load >= bands.front().load_low && load <= bands.back().load_high;
+}
+
 std::size_t Reference::band_of(double load) const {
   for (std::size_t i = 0; i < bands.size(); ++i)
     if (load < bands[i].load_high) return i;
@@ -220,8 +224,16 @@ Reference build_reference(const ModelConfig& model, const ReferenceSettings& set
                                        settings.warmup, settings.windows);
     ReferenceBand band;
     band.load = loads[b];
-    band.load_low = b == 0 ? -std::numeric_limits<double>::infinity() : 0.5 * (loads[b - 1] + loads[b]);
-    band.load_high = b + 1 == loads.size() ? std::numeric_limits<double>::infinity() : 0.5 * (loads[b] + loads[b + 1]);
+    // Inner edges halfway between the nominal loads; the outer ones where the reference's windows
+    // end: beyond them it has no healthy window to compare with (the live load wanders).
+    double lowest = std::numeric_limits<double>::infinity(), highest = -lowest;
+    for (const auto& run : runs)
+      for (const auto& w : run) {
+        lowest = std::min(lowest, w.mean_load);
+        highest = std::max(highest, w.mean_load);
+      }
+    band.load_low = b == 0 ? lowest : 0.5 * (loads[b - 1] + loads[b]);
+    band.load_high = b + 1 == loads.size() ? highest : 0.5 * (loads[b] + loads[b + 1]);
 
     // NA4*'s baseline: the mean residual variance of the healthy windows.
     double residual = 0.0;
@@ -524,6 +536,13 @@ Assessment ConditionMonitor::assess(const RevolutionWindow& window) {
   for (std::size_t i = 0; i < a.indicators.size(); ++i) a.exceeded[i] = a.indicators[i] > band.threshold[i];
   a.t2 = hotelling_t2(band, a.indicators);
   a.score = t2_score(band, a.t2);
+  a.in_reference = reference_.covers(window.mean_load);
+  if (!a.in_reference) {
+    // Not judged: the CUSUM holds, and the WARN says the monitor is blind at this load.
+    a.cusum = cusum_;
+    a.health = Health::kWarn;
+    return a;
+  }
   cusum_ = std::max(0.0, cusum_ + a.score - reference_.settings.cusum_reference);
   a.cusum = cusum_;
   a.t2_alarm = a.t2 > band.t2_threshold;

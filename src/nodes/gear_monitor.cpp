@@ -115,6 +115,7 @@ class GearMonitor {
     if (!window) return;
     const gd::Assessment a = monitor_->assess(*window);
     ++window_count_;
+    outside_count_ += !a.in_reference;
     last_ = a;
     debounce(a.health);
 
@@ -132,6 +133,7 @@ class GearMonitor {
     msg.score = a.score;
     msg.cusum = a.cusum;
     msg.cusum_threshold = monitor_->reference().cusum_threshold;
+    msg.in_reference = a.in_reference;
     msg.level = level_of(a.health);
     msg.reported_level = level_of(reported_);
     publisher_.publish(msg);
@@ -163,10 +165,14 @@ class GearMonitor {
     } else if (window_count_ == 0) {
       stat.summary(DiagnosticStatus::OK, "collecting the first window");
     } else {
-      const char* text = reported_ == gd::Health::kError  ? "fault: the CUSUM of T2 is above its threshold"
-                         : reported_ == gd::Health::kWarn ? "T2 above its threshold"
-                                                          : "healthy";
-      stat.summary(level_of(reported_), text);
+      const gd::Reference& ref = monitor_->reference();
+      if (reported_ == gd::Health::kWarn && !last_->in_reference)
+        stat.summaryf(DiagnosticStatus::WARN, "not judged: load %.4g m/s^2 outside the reference's [%.4g, %.4g]",
+                      last_->load, ref.bands.front().load_low, ref.bands.back().load_high);
+      else
+        stat.summary(level_of(reported_), reported_ == gd::Health::kError  ? "fault: the CUSUM of T2 is above its threshold"
+                                          : reported_ == gd::Health::kWarn ? "T2 above its threshold"
+                                                                           : "healthy");
     }
     stat.add("reference", reference_path_);
     stat.add("reference checked against run_info", checked_);
@@ -177,6 +183,8 @@ class GearMonitor {
     if (last_) {
       stat.add("load [m/s^2]", last_->load);
       stat.add("load band", last_->band);
+      stat.add("load within the reference's", last_->in_reference);
+      stat.add("windows not judged (load outside the reference's)", outside_count_);
       stat.add("T2", last_->t2);
       stat.add("T2 threshold", monitor_->reference().bands[last_->band].t2_threshold);
       stat.add("CUSUM", last_->cusum);
@@ -202,7 +210,7 @@ class GearMonitor {
   ros::Subscriber run_info_sub_, state_sub_;
   ros::WallTimer timer_;
   ros::WallTime last_input_;
-  long states_ = 0, window_count_ = 0, gaps_ = 0;
+  long states_ = 0, window_count_ = 0, gaps_ = 0, outside_count_ = 0;
   double spacing_ = 0.0;  // of the input's first two states [s]
   std::optional<gd::Assessment> last_;
   gd::Health pending_ = gd::Health::kOk, reported_ = gd::Health::kOk;

@@ -68,7 +68,7 @@ int main(int argc, char** argv) {
     gd::ConditionMonitor monitor(ref);
     double assessing = 0;  // [s] in ConditionMonitor::assess: the per-window cost of the monitor
     std::vector<int> exceeded(ref.indicators.size(), 0);
-    int windows = 0, warn = 0, detected = 0;
+    int windows = 0, warn = 0, detected = 0, outside = 0;
     std::FILE* table = nullptr;
     if (!csv.empty()) {
       table = std::fopen(csv.c_str(), "w");
@@ -88,6 +88,7 @@ int main(int argc, char** argv) {
         assessing += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         ++windows;
         warn += a.t2_alarm;
+        outside += !a.in_reference;
         for (std::size_t i = 0; i < exceeded.size(); ++i) exceeded[i] += a.exceeded[i];
         if (a.cusum_alarm && first_error < 0) first_error = static_cast<int>(w) + 1;
         if (table) {
@@ -108,6 +109,9 @@ int main(int argc, char** argv) {
                 "window\n",
                 s.realizations, s.windows, static_cast<double>(warn) / windows, ref.settings.false_alarm, detected,
                 detected ? delay / detected : 0.0, simulated, 1e6 * assessing / windows);
+    if (outside)
+      std::printf("%d windows not judged: their load outside the reference's [%.6g, %.6g] m/s^2\n", outside,
+                  ref.bands.front().load_low, ref.bands.back().load_high);
     for (std::size_t i = 0; i < exceeded.size(); ++i)
       std::printf("  %-15s %.3f\n", ref.indicators[i].c_str(), static_cast<double>(exceeded[i]) / windows);
   } catch (const std::exception& e) {

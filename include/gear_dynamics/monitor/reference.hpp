@@ -70,7 +70,8 @@ double monitored_value(const Ensemble& ensemble, int lane, MonitoredSignal signa
 std::vector<std::vector<RevolutionWindow>> simulate_windows(const ModelConfig& config, const MonitorSettings& settings,
                                                             std::uint64_t first, int count, double warmup, int windows);
 
-// The reference of one load band: windows whose mean load is in [load_low, load_high).
+// The reference of one load band: windows whose mean load is in [load_low, load_high); the lowest
+// band starts and the highest ends at the extreme mean load of the reference's own windows.
 struct ReferenceBand {
   double load = 0.0, load_low = 0.0, load_high = 0.0;  // nominal mean and edges [m/s^2]
   std::size_t windows = 0;
@@ -91,7 +92,9 @@ struct Reference {
   std::vector<std::string> indicators;  // indicator_names() when made
   double cusum_threshold = 0.0;         // h, for settings.average_run_length by Siegmund
   std::vector<ReferenceBand> bands;
-  // The band of a window's mean load.
+  // Whether a mean load lies within the reference's windows' loads (bands' outer edges included).
+  bool covers(double load) const;
+  // The band of a window's mean load (the nearest one outside the reference's loads).
   std::size_t band_of(double load) const;
 };
 
@@ -128,12 +131,13 @@ struct Assessment {
   std::vector<char> exceeded;  // per indicator: above its threshold
   bool t2_alarm = false;       // this window: T² above its threshold (WARN)
   bool cusum_alarm = false;    // persistence: the CUSUM above h (ERROR)
+  bool in_reference = true;    // the load within the reference's (Reference::covers); if not: WARN, CUSUM held
   Health health = Health::kOk;
 };
 
 // Applies a reference to a run's windows: indicators (with the run's NA4/NB4 trends), T², the
 // CUSUM, and the health: ERROR while the CUSUM is above h, else WARN if this window's T² is above
-// its threshold, else OK.
+// its threshold or its load outside the reference's (not judged, the CUSUM held), else OK.
 class ConditionMonitor {
  public:
   explicit ConditionMonitor(Reference reference);
