@@ -13,6 +13,7 @@ Every number comes from the CSV files the aggregator wrote (paper units); this s
 --wait reads a line from stdin before reading the folder (end of input: exit 0, nothing drawn):
 gear_aggregator starts the script early, so that Python and matplotlib are loaded when its CSV
 files are written.
+Figures whose inputs are unchanged since they were drawn are kept (figures.sha256, see below).
 """
 import argparse
 import csv
