@@ -13,12 +13,16 @@ Every number comes from the CSV files the aggregator wrote (paper units); this s
 --wait reads a line from stdin before reading the folder (end of input: exit 0, nothing drawn):
 gear_aggregator starts the script early, so that Python and matplotlib are loaded when its CSV
 files are written.
+Figures whose inputs are unchanged since they were drawn are kept (figures.sha256, see below).
 """
 import argparse
 import csv
+import glob
+import hashlib
 import math
 import os
 import sys
+import time
 
 import matplotlib
 import numpy as np
@@ -430,12 +434,18 @@ def main():
         fig.savefig(os.path.join(args.folder, filename), dpi=120)
         plt.close(fig)
 
+    inputs = inputs_digest(args.folder, args.mu)
+    if figures_current(args.folder, inputs):
+        print("plot_report: the figures in %s are those of these CSV files; not drawn again" % args.folder)
+        return
+    started = time.time()
     points = os.path.join(args.folder, "points.csv")
     study = os.path.exists(points) and len(axis_columns(read(args.folder, "points.csv"))) > 1
     if study:  # a study with more axes than mu: its figures, not the paper's
         draw_in_parallel([lambda: study_figures(args.folder, out), lambda: safety_figure(args.folder, out),
                           lambda: first_passage_figure(args.folder, out), lambda: spectrum_figure(args.folder, out),
                           lambda: poincare_figure(args.folder, out)])
+        record_figures(args.folder, inputs, started)
         print("plot_report: study figures written to %s" % args.folder)
         return
     # Dearest first (the series, spectrum band and Poincaré points are the largest CSV files), so
@@ -453,7 +463,50 @@ def main():
         lambda: center_distance_figures(args.folder, out),
         lambda: first_passage_figure(args.folder, out),
     ])
+    record_figures(args.folder, inputs, started)
     print("plot_report: figures written to %s" % args.folder)
+
+
+# The figures are a function of the CSV files, this script, --mu and matplotlib: FIGURES_DIGEST
+# records that input's digest and each figure's, so that a report rewritten with the same numbers
+# (the main command run again) keeps its figures instead of drawing them again.
+FIGURES_DIGEST = "figures.sha256"
+
+
+def file_digest(path):
+    with open(path, "rb") as f:
+        return hashlib.sha256(f.read()).hexdigest()
+
+
+def inputs_digest(folder, mu):
+    h = hashlib.sha256()
+    h.update(("mu %r matplotlib %s\n" % (mu, matplotlib.__version__)).encode())
+    h.update(file_digest(os.path.abspath(__file__)).encode())
+    for path in sorted(glob.glob(os.path.join(folder, "*.csv"))):
+        h.update(("%s %s\n" % (os.path.basename(path), file_digest(path))).encode())
+    return h.hexdigest()
+
+
+def figures_current(folder, inputs):
+    """Whether FIGURES_DIGEST names these inputs and every figure it lists is there, unchanged."""
+    try:
+        with open(os.path.join(folder, FIGURES_DIGEST)) as f:
+            lines = f.read().split("\n")
+    except OSError:
+        return False
+    if lines[0] != "inputs " + inputs:
+        return False
+    figures = [line.split(" ", 1) for line in lines[1:] if line]
+    return bool(figures) and all(os.path.exists(os.path.join(folder, name)) and
+                                 file_digest(os.path.join(folder, name)) == digest for digest, name in figures)
+
+
+def record_figures(folder, inputs, started):
+    """Writes FIGURES_DIGEST for the figures written since `started`."""
+    drawn = sorted(p for p in glob.glob(os.path.join(folder, "*.png")) if os.path.getmtime(p) >= started - 0.05)
+    with open(os.path.join(folder, FIGURES_DIGEST), "w") as f:
+        f.write("inputs %s\n" % inputs)
+        f.writelines("%s %s\n" % (file_digest(p), os.path.basename(p)) for p in drawn)
 
 
 def draw_in_parallel(tasks):

@@ -27,11 +27,23 @@ sanitizer_log=$(mktemp)
 nice -n 19 /usr/bin/python3 "$GD_REPO/test/faults/sanitizers.py" \
   "$GD_WS/build/test_results/gear_dynamics/faults-sanitizers.xml" >"$sanitizer_log" 2>&1 &
 sanitizers=$!
+# Every test binary is built first, then setup.sh's build is stamped again: from here on nothing
+# builds in the workspace while tests run in it (a documented command that sources setup.sh finds
+# the build current and skips catkin_make).
+(cd "$GD_WS" && catkin_make tests -j"$(nproc)") || status=$?
+gd_build "${gd_build_args[@]}" >/dev/null || status=$?
+# Every command line of the docs, as typed (test/docs/run_doc_commands.py), beside catkin's tests:
+# both wait much of the time (masters, launches, timers, Slurm), and each block and test has a
+# master of its own. Not a catkin target: a documented command may run catkin_make itself. At
+# nice 10 the tests come first when both want the CPU; their log follows catkin's.
+doc_log=$(mktemp)
+nice -n 10 /usr/bin/python3 "$GD_REPO/test/docs/run_doc_commands.py" \
+  "$GD_WS/build/test_results/gear_dynamics/doc-commands.xml" >"$doc_log" 2>&1 &
+doc_commands=$!
 (cd "$GD_WS" && catkin_make run_tests -j"$(nproc)") || status=$?
-# Every command line of the docs, as typed (test/docs/run_doc_commands.py). Here, not as a catkin
-# target: some documented commands build the workspace, which must not happen inside catkin_make.
-/usr/bin/python3 "$GD_REPO/test/docs/run_doc_commands.py" "$GD_WS/build/test_results/gear_dynamics/doc-commands.xml" ||
-  status=1
+wait "$doc_commands" || status=1
+cat "$doc_log"
+rm -f "$doc_log"
 # setup.sh's skip of catkin_make when nothing changed, and its rebuild when something did (it runs
 # catkin_make, so here too).
 /usr/bin/python3 "$GD_REPO/test/setup/build_check.py" "$GD_WS/build/test_results/gear_dynamics/setup-build_check.xml" ||
