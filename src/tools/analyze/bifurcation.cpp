@@ -39,11 +39,13 @@ int Bifurcation::run(const Common& c) {
   const auto t0 = std::chrono::steady_clock::now();
   const auto r = bifurcation_scan(cfg, p, values, so);
   const double wall = seconds_since(t0);
-  std::ofstream f = open_csv(c, "bifurcation");
+  const auto f_file = open_csv(c, "bifurcation");
+  std::ostream& f = f_file->out();
   f << "value,k,t,delta,delta_dot\n";
   for (const auto& v : r)
     for (const auto& q : v.points) f << v.value << "," << q.k << "," << q.time << "," << q.x[0] << "," << q.x[1] << "\n";
-  std::ofstream s = open_csv(c, "bifurcation_summary");
+  const auto s_file = open_csv(c, "bifurcation_summary");
+  std::ostream& s = s_file->out();
   s << "parameter,value,period,regime,min_gap,min_delta,points\n";
   for (const auto& v : r) {
     s << scan_parameter_name(p) << "," << v.value << "," << v.period << ",\"" << v.regime << "\"," << v.min_gap << ","

@@ -27,12 +27,11 @@ ModelConfig load_config(const Common& c, std::optional<double> duration) {
   return parse_config(root);
 }
 
-std::ofstream open_csv(const Common& c, const std::string& name) {
-  const std::string path = c.output + "_" + name + ".csv";
-  std::ofstream f(path);
-  if (!f) throw std::runtime_error("cannot write " + path);
-  f.precision(17);
-  std::cout << "wrote " << path << "\n";
+std::unique_ptr<ReportFile> open_csv(const Common& c, const std::string& name) {
+  std::vector<std::string> written;
+  auto f = std::make_unique<ReportFile>(c.output + "_" + name + ".csv", written);
+  f->out().precision(17);
+  std::cout << "wrote " << written.front() << "\n";
   return f;
 }
 

@@ -3,12 +3,13 @@
 #pragma once
 
 #include <chrono>
-#include <fstream>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "gear_dynamics/config/config.hpp"
+#include "gear_dynamics/report/report_file.hpp"
 #include "gear_dynamics/ros/live_bag.hpp"
 #include "subcommand.hpp"
 
@@ -18,8 +19,9 @@ namespace gear_dynamics::tools::analyze {
 // times after the run are dropped: the tools do not use them.
 ModelConfig load_config(const Common& c, std::optional<double> duration = std::nullopt);
 
-// PREFIX_<name>.csv, opened for writing with every digit of a double (17), announced on stdout.
-std::ofstream open_csv(const Common& c, const std::string& name);
+// PREFIX_<name>.csv, opened through the report layer (its write checked when it closes) with every
+// digit of a double (17), announced on stdout.
+std::unique_ptr<ReportFile> open_csv(const Common& c, const std::string& name);
 
 double seconds_since(std::chrono::steady_clock::time_point t0);
 

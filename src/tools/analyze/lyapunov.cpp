@@ -132,7 +132,8 @@ int Lyapunov::tangent(const Common& common, const ModelConfig& c, double h, cons
     };
     return window_between(at(transient), at(so.duration));
   };
-  std::ofstream f = open_csv(common, "lyapunov");
+  const auto f_file = open_csv(common, "lyapunov");
+  std::ostream& f = f_file->out();
   f << runs.column << ",exponent,exponent2,trace,liouville_error\n";
   std::vector<double> l1, l2, liouville;
   for (int i = 0; i < n; ++i) {
@@ -143,13 +144,15 @@ int Lyapunov::tangent(const Common& common, const ModelConfig& c, double h, cons
     l2.push_back(w.exponent[1]);
     liouville.push_back(std::fabs(err));
   }
-  std::ofstream fw = open_csv(common, "lyapunov_windows");
+  const auto fw_file = open_csv(common, "lyapunov_windows");
+  std::ostream& fw = fw_file->out();
   fw << "id,value,start,end,exponent,exponent2,trace\n";
   for (int i = 0; i < n; ++i)
     for (const auto& w : res[i].windows)
       fw << i << "," << runs.values[i] << "," << w.start << "," << w.end << "," << w.exponent[0] << "," << w.exponent[1]
          << "," << w.trace << "\n";
-  std::ofstream fr = open_csv(common, "lyapunov_running");
+  const auto fr_file = open_csv(common, "lyapunov_running");
+  std::ostream& fr = fr_file->out();
   fr << "id,value,t,running\n";
   for (int i = 0; i < n; ++i)
     for (std::size_t k = 0; k < res[i].time.size(); ++k)
@@ -199,7 +202,8 @@ int Lyapunov::pairs(const Common& common, const ModelConfig& c, double h, const 
     for (std::size_t k = 0; k < r.size(); ++k) res[blk * per + k] = r[k];
   });
   const double wall = seconds_since(t0);
-  std::ofstream f = open_csv(common, "lyapunov");
+  const auto f_file = open_csv(common, "lyapunov");
+  std::ostream& f = f_file->out();
   f << runs.column << ",exponent,max_log_growth,min_log_growth,intervals\n";
   std::vector<double> ex;
   for (int i = 0; i < n; ++i) {
@@ -207,7 +211,8 @@ int Lyapunov::pairs(const Common& common, const ModelConfig& c, double h, const 
       << res[i].intervals << "\n";
     ex.push_back(res[i].exponent);
   }
-  std::ofstream fr = open_csv(common, "lyapunov_running");
+  const auto fr_file = open_csv(common, "lyapunov_running");
+  std::ostream& fr = fr_file->out();
   fr << "id,value,t,running\n";
   for (int i = 0; i < n; ++i)
     for (std::size_t k = 0; k < res[i].time.size(); ++k)

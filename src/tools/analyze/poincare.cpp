@@ -67,7 +67,8 @@ int Poincare::simulate(const Common& c) const {
     EnsembleLanes sys(e);
     st = poincare_section(sys, {Tm, 0.0, transient, cfg.run.duration, {}});
   }
-  std::ofstream f = open_csv(c, "poincare");
+  const auto f_file = open_csv(c, "poincare");
+  std::ostream& f = f_file->out();
   f << "set,run,phase0,k,t,delta,delta_dot,on_grid\n";
   for (int j = 0; j < P; ++j)
     for (const auto& p : ph[j])
@@ -88,7 +89,8 @@ int Poincare::from_bag(const Common& c) const {
   const GearPair g = derive(b.config.gear);
   const double transient = transient_, Tm = mesh_period(g), dt = b.period;
   const auto& r = b.run;
-  std::ofstream f = open_csv(c, "poincare");
+  const auto f_file = open_csv(c, "poincare");
+  std::ostream& f = f_file->out();
   f << "set,run,phase0,k,t,delta,delta_dot,on_grid\n";
   // Mesh phase 0 at t = first_mesh_period_start + k T_m: a recorded state where that is a recording
   // time, else the cubic Hermite through the two recorded states around it.

@@ -88,14 +88,16 @@ int Safety::simulate(const Common& common) const {
   });
   const double wall = seconds_since(t0);
   const auto s = safety_over_time(runs, di, vi);
-  std::ofstream f = open_csv(common, "safety");
+  const auto f_file = open_csv(common, "safety");
+  std::ostream& f = f_file->out();
   f << "t,joint,joint_low,joint_high,delta,delta_low,delta_high,velocity,velocity_low,velocity_high\n";
   for (std::size_t j = 0; j < s.time.size(); ++j)
     f << s.time[j] << "," << s.joint[j].estimate << "," << s.joint[j].low << "," << s.joint[j].high << ","
       << s.delta_only[j].estimate << "," << s.delta_only[j].low << "," << s.delta_only[j].high << ","
       << s.velocity_only[j].estimate << "," << s.velocity_only[j].low << "," << s.velocity_only[j].high << "\n";
   const auto fp = first_passage(runs, di, vi, settle);
-  std::ofstream fpf = open_csv(common, "first_passage");
+  const auto fpf_file = open_csv(common, "safety_exit");
+  std::ostream& fpf = fpf_file->out();
   fpf << "run,time,event\n";
   std::size_t events = 0;
   for (int r = 0; r < R; ++r) {
@@ -103,7 +105,8 @@ int Safety::simulate(const Common& common) const {
     events += fp.event[r];
   }
   const auto km = kaplan_meier(fp.time, fp.event);
-  std::ofstream kf = open_csv(common, "survival");
+  const auto kf_file = open_csv(common, "safety_survival");
+  std::ostream& kf = kf_file->out();
   kf << "t,survival,low,high,at_risk,events\n";
   kf << settle << ",1,1,1," << R << ",0\n";
   for (std::size_t i = 0; i < km.time.size(); ++i)
@@ -113,7 +116,8 @@ int Safety::simulate(const Common& common) const {
   if (!km.time.empty() && km.time.back() < runs.time.back())
     kf << runs.time.back() << "," << km.survival.back() << "," << km.low.back() << "," << km.high.back() << ",0,0\n";
   // PDFs at T: histogram (doc/model.md §8 edges) and KDE with Silverman's bandwidth.
-  std::ofstream pf = open_csv(common, "pdf");
+  const auto pf_file = open_csv(common, "pdf");
+  std::ostream& pf = pf_file->out();
   pf << "variable,x,histogram,kde,bandwidth\n";
   const auto pdf = [&](const std::string& name, const std::vector<double>& x, double lo, double hi, double width) {
     const double bw = silverman_bandwidth(x);
@@ -152,7 +156,8 @@ int Safety::from_bag(const Common& common) const {
   runs.delta = {b.run.delta};
   runs.velocity = {b.run.delta_dot};
   const auto s = safety_over_time(runs, di, vi);
-  std::ofstream f = open_csv(common, "safety");
+  const auto f_file = open_csv(common, "safety");
+  std::ostream& f = f_file->out();
   f << "t,joint,delta,velocity\n";
   std::size_t after = 0, inside = 0;
   for (std::size_t j = 0; j < s.time.size(); ++j) {
@@ -161,7 +166,8 @@ int Safety::from_bag(const Common& common) const {
     if (s.time[j] >= settle) ++after, inside += s.joint[j].estimate > 0.5;
   }
   const auto fp = first_passage(runs, di, vi, settle);
-  std::ofstream fpf = open_csv(common, "first_passage");
+  const auto fpf_file = open_csv(common, "safety_exit");
+  std::ostream& fpf = fpf_file->out();
   fpf << "run,time,event\n" << 0 << "," << fp.time[0] << "," << fp.event[0] << "\n";
   std::printf("# safety of the bag's run: delta in [%g, %g] m, delta_dot in [%g, %g] m/s; after %g s %zu of %zu "
               "recorded states inside (%.1f %%); %s\n",

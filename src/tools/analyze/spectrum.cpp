@@ -159,7 +159,8 @@ SpectrumInput Spectrum::from_bag(const Common& c) const {
 void Spectrum::write_sidebands(const Common& c, const std::vector<double>& f, const std::vector<double>& d, double fm,
                                double fr) const {
   const int K = sidebands_;
-  std::ofstream sb = open_csv(c, "sidebands");
+  const auto sb_file = open_csv(c, "sidebands");
+  std::ostream& sb = sb_file->out();
   sb << "harmonic,order,frequency,bin_frequency,density,line\n";
   int found = 0;
   const std::vector<Sideband> lines = sidebands(f, d, fm, fr, harmonics_, K);
@@ -191,7 +192,8 @@ void Spectrum::write_spectra(const Common& c, const SpectrumInput& in) const {
               s1.segments, R, in.wall);
   std::printf("# mesh frequency f_m = %.6g Hz\n", fm);
   {
-    std::ofstream f = open_csv(c, "psd");
+    const auto f_file = open_csv(c, "psd");
+  std::ostream& f = f_file->out();
     f << "frequency,delta_S1,force_S1";
     if (R > 0) f << ",delta_mean,delta_mean_low,delta_mean_high,delta_run_low,delta_run_high,force_mean,force_mean_low,force_mean_high,force_run_low,force_run_high";
     f << "\n";
@@ -208,7 +210,8 @@ void Spectrum::write_spectra(const Common& c, const SpectrumInput& in) const {
           << bf.run_low[i] << "," << bf.run_high[i];
       f << "\n";
     }
-    std::ofstream pk = open_csv(c, "peaks");
+    const auto pk_file = open_csv(c, "peaks");
+  std::ostream& pk = pk_file->out();
     pk << "series,frequency,density,harmonic,offset,is_harmonic,prominence\n";
     const int H = harmonics_;
     const auto emit = [&](const std::string& name, const std::vector<double>& fr, const std::vector<double>& d) {
@@ -230,7 +233,8 @@ void Spectrum::write_spectra(const Common& c, const SpectrumInput& in) const {
       emit("force_mean", s1.frequency, bf.mean);
     }
     if (periods > 1) write_sidebands(c, s1.frequency, pf[0].density, fm, fm / periods);
-    std::ofstream meta = open_csv(c, "spectrum_info");
+    const auto meta_file = open_csv(c, "spectrum_info");
+  std::ostream& meta = meta_file->out();
     meta << "mesh_frequency,sample_rate,resolution,enbw,segment,overlap,segments,realizations,transient,duration\n"
          << fm << "," << fs << "," << s1.resolution << "," << s1.enbw << "," << s1.segment << "," << w.overlap << ","
          << s1.segments << "," << R << "," << transient << "," << in.duration << "\n";

@@ -34,7 +34,8 @@ int Stiffness::run(const Common& c) {
   const MeshSchedule mesh(g, cfg.run.time_step);
   const int per = points_;
   const long N = static_cast<long>(per) * g.in.pinion_teeth;
-  std::ofstream f = open_csv(c, "stiffness");
+  const auto f_file = open_csv(c, "stiffness");
+  std::ostream& f = f_file->out();
   f << "angle[rad],stiffness[N/m]\n";
   double lo = INFINITY, hi = 0.0, sum = 0.0;
   for (long i = 0; i <= N; ++i) {
