@@ -79,8 +79,9 @@ int Poincare::simulate(const Common& c) const {
   std::printf("# poincare: mesh period %.6g s (%s), transient %g s, T %g s, %d phases, %d realizations, %.1f s wall\n",
               Tm, on_step_grid(Tm, h) ? "a whole number of steps: grid states" : "interpolated", transient,
               cfg.run.duration, P, R, seconds_since(t0));
-  const int period = detect_period(ph[0], 16, {1e-3 * g.in.backlash, 1e-3 * std::sqrt(2 * cfg.load.initial_mean * g.in.backlash)});
-  std::printf("S1: %zu points, %s\n", ph[0].size(), period > 0 ? ("period " + std::to_string(period)).c_str() : "no period <= 16 (aperiodic)");
+  const int limit = period_search_limit(cfg.gear, 16);
+  const int period = detect_period(ph[0], limit, {1e-3 * g.in.backlash, 1e-3 * std::sqrt(2 * cfg.load.initial_mean * g.in.backlash)});
+  std::printf("S1: %zu points, %s\n", ph[0].size(), period > 0 ? ("period " + std::to_string(period)).c_str() : ("no period <= " + std::to_string(limit) + " (aperiodic)").c_str());
   return 0;
 }
 
@@ -115,11 +116,12 @@ int Poincare::from_bag(const Common& c) const {
       << p.on_grid << "\n";
     points.push_back(p);
   }
-  const int period = detect_period(points, 16, {1e-3 * g.in.backlash, 1e-3 * std::sqrt(2 * b.config.load.initial_mean * g.in.backlash)});
+  const int limit = period_search_limit(b.config.gear, 16);
+  const int period = detect_period(points, limit, {1e-3 * g.in.backlash, 1e-3 * std::sqrt(2 * b.config.load.initial_mean * g.in.backlash)});
   std::printf("# poincare of the bag: mesh period %.6g s (%s), transient %g s; %zu points, %s\n", Tm,
               on_step_grid(Tm, dt) ? "a whole number of recording periods: recorded states"
                                        : "interpolated between recorded states",
-              transient, points.size(), period > 0 ? ("period " + std::to_string(period)).c_str() : "no period <= 16");
+              transient, points.size(), period > 0 ? ("period " + std::to_string(period)).c_str() : ("no period <= " + std::to_string(limit)).c_str());
   return 0;
 }
 
