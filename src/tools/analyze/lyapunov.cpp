@@ -47,6 +47,10 @@ class Lyapunov : public Subcommand {
         ->type_name("D0")->check(positive())->capture_default_str();
     app.add_option("--step-divisor", step_divisor_, "time step h/M (2 = h/2)")->type_name("M")->check(in_range(1))
         ->capture_default_str();
+    app.add_option("--absorbed-periods", absorbed_periods_,
+                   "a run without separation (delta - e > b) over its last N mesh periods counts as absorbed into "
+                   "permanent contact (tangent)")
+        ->type_name("N")->check(in_range(1))->capture_default_str();
     add_parameter_options(app, range_);
   }
   int run(const Common& common) override;
@@ -64,6 +68,7 @@ class Lyapunov : public Subcommand {
   std::vector<double> windows_ = {0, 0.1, 0.2, 0.4};
   double separation_ = 1e-8;
   int step_divisor_ = 1;
+  int absorbed_periods_ = 100;
   ParameterRange range_;
 };
 
@@ -134,12 +139,21 @@ int Lyapunov::tangent(const Common& common, const ModelConfig& c, double h, cons
   };
   const auto f_file = open_csv(common, "lyapunov");
   std::ostream& f = f_file->out();
-  f << runs.column << ",exponent,exponent2,trace,liouville_error\n";
+  f << runs.column << ",exponent,exponent2,trace,liouville_error,last_separation,absorbed\n";
   std::vector<double> l1, l2, liouville;
+  // Absorbed: left the rattle for permanent contact, delta - e > b at every step of the last
+  // --absorbed-periods mesh periods (each run's own mesh period along a speed scan).
+  std::vector<int> absorbed;
+  for (int i = 0; i < n; ++i) {
+    const double quiet = absorbed_periods_ * mesh_period(derive(runs.specs[i].gear));
+    if (res[i].last_separation <= so.duration - quiet) absorbed.push_back(i);
+  }
   for (int i = 0; i < n; ++i) {
     const SpectrumWindow w = main_window(res[i]);
     const double err = res[i].exponent[0] + res[i].exponent[1] - res[i].trace;  // over [0, duration]
-    f << runs.values[i] << "," << w.exponent[0] << "," << w.exponent[1] << "," << w.trace << "," << err << "\n";
+    const bool in_contact = std::find(absorbed.begin(), absorbed.end(), i) != absorbed.end();
+    f << runs.values[i] << "," << w.exponent[0] << "," << w.exponent[1] << "," << w.trace << "," << err << ","
+      << res[i].last_separation << "," << (in_contact ? 1 : 0) << "\n";
     l1.push_back(w.exponent[0]);
     l2.push_back(w.exponent[1]);
     liouville.push_back(std::fabs(err));
@@ -163,6 +177,11 @@ int Lyapunov::tangent(const Common& common, const ModelConfig& c, double h, cons
               c.friction_coefficient, n, runs.what.c_str(), wall);
   print_box("largest exponent [1/s]", l1);
   print_box("second exponent [1/s]", l2);
+  std::printf("absorbed into permanent contact (delta - e > b over the last %d mesh periods): %zu of %d %s",
+              absorbed_periods_, absorbed.size(), n, runs.what.c_str());
+  for (std::size_t k = 0; k < absorbed.size(); ++k)
+    std::printf("%s%d (last separation %.4g s)", k ? ", " : ": ", absorbed[k], res[absorbed[k]].last_separation);
+  std::printf("\n");
   std::printf("|lambda1 + lambda2 - mean trace| over [0, %g] s: max %.3g 1/s\n", so.duration,
               *std::max_element(liouville.begin(), liouville.end()));
   for (std::size_t k = 0; k + 1 < edges.size(); ++k) {
