@@ -9,6 +9,7 @@
 
 #include "common.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
+#include "gear_dynamics/engine/simulation.hpp"
 #include "gear_dynamics/maths/safety.hpp"
 #include "gear_dynamics/maths/statistics.hpp"
 
@@ -77,14 +78,14 @@ int Safety::simulate(const Common& common) const {
     for (int r = blk * per; r < std::min(R, blk * per + per); ++r)
       lanes.push_back(stochastic_lane(c, c.friction_coefficient, r));
     Ensemble e(g, h, c.initial, lanes, c.seed);
-    for (std::int64_t n = 0; n <= N; ++n) {
-      if (n % every == 0)
-        for (int l = 0; l < e.lanes(); ++l) {
-          runs.delta[blk * per + l].push_back(e.delta()[l]);
-          runs.velocity[blk * per + l].push_back(e.velocity()[l]);
-        }
-      if (n < N) e.step();
-    }
+    // The engine's loop records at the multiples of `every`, as runs.time above.
+    const Recorder record{every, [&](const Ensemble& en, const Eigen::ArrayXd&) {
+                            for (int l = 0; l < en.lanes(); ++l) {
+                              runs.delta[blk * per + l].push_back(en.delta()[l]);
+                              runs.velocity[blk * per + l].push_back(en.velocity()[l]);
+                            }
+                          }};
+    gear_dynamics::simulate(e, c.run, record);
   });
   const double wall = seconds_since(t0);
   const auto s = safety_over_time(runs, di, vi);
