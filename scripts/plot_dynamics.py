@@ -186,7 +186,7 @@ def lyapunov(prefix, _args):
 
 def safety(prefix, _args):
     s = read(prefix + "_safety.csv")
-    km = read(prefix + "_survival.csv")
+    km = read(prefix + "_safety_survival.csv")
     pdf = read(prefix + "_pdf.csv")
     fig, axes = plt.subplots(2, 2, figsize=(11, 8))
     t = col(s, "t")

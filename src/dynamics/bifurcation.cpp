@@ -1,5 +1,7 @@
 #include "gear_dynamics/dynamics/bifurcation.hpp"
 
+#include "gear_dynamics/model/mesh_table.hpp"
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -38,6 +40,10 @@ ModelConfig with_parameter(const ModelConfig& base, ScanParameter p, double v) {
   return c;
 }
 
+int period_search_limit(const GearInputs& gear, int at_least) {
+  return std::max(at_least, schedule_mesh_periods(gear));
+}
+
 int detect_period(const std::vector<SectionState>& pts, int max_period, const std::vector<double>& tol) {
   const int n = static_cast<int>(pts.size());
   for (int p = 1; p <= max_period && 2 * p <= n; ++p) {
@@ -52,8 +58,8 @@ int detect_period(const std::vector<SectionState>& pts, int max_period, const st
 
 namespace {
 
-void classify(ScanValue& v, const ScanOptions& o, double b, double vref) {
-  v.period = detect_period(v.points, o.max_period, {o.tolerance * b, o.tolerance * vref});
+void classify(ScanValue& v, const ScanOptions& o, const GearInputs& gear, double b, double vref) {
+  v.period = detect_period(v.points, period_search_limit(gear, o.max_period), {o.tolerance * b, o.tolerance * vref});
   const std::string motion = v.period > 0 ? "period-" + std::to_string(v.period) : "aperiodic";
   if (v.min_gap > 0) v.regime = motion + ", no separation";
   else if (v.min_delta >= -b) v.regime = motion + ", single-sided impacts";
@@ -126,7 +132,7 @@ std::vector<ScanValue> bifurcation_scan(const ModelConfig& base, ScanParameter p
         }
       v.min_delta = min_delta[l];
       v.min_gap = min_delta[l] - b;
-      classify(v, o, b, std::sqrt(2.0 * std::abs(configs[first + l].load.initial_mean) * b));
+      classify(v, o, configs[first + l].gear, b, std::sqrt(2.0 * std::abs(configs[first + l].load.initial_mean) * b));
     }
   });
   return out;

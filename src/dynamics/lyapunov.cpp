@@ -71,6 +71,7 @@ LyapunovSpectrum lyapunov_spectrum(const GearLaneSpec& lane, double h, const Spe
     kernel::rk4_step_tangent(mesh.plan(n), h, b, g.damping_coefficient, g.q3, lane.mu, lane.load, lane.load, d, v, t);
     if (!std::isfinite(d) || !std::isfinite(v))
       throw std::runtime_error("lyapunov_spectrum: the gear model diverged at t = " + std::to_string((n + 1) * h) + " s");
+    if (d - mesh.transmission_error((n + 1) * h) <= b) out.last_separation = (n + 1) * h;
     ++since;
     const bool edge = next_edge < edges.size() && edges[next_edge] == n + 1;
     if (since == o.orthonormalise_every || edge || n + 1 == n_end) {

@@ -7,7 +7,7 @@
 #include <stdexcept>
 
 #include "gear_dynamics/analysis/report_text.hpp"
-#include "report_file.hpp"
+#include "gear_dynamics/report/report_file.hpp"
 #include "sections.hpp"
 
 namespace gear_dynamics {

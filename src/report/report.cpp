@@ -9,7 +9,7 @@
 
 #include "gear_dynamics/analysis/report_text.hpp"
 #include "gear_dynamics/report/paper_reference.hpp"
-#include "report_file.hpp"
+#include "gear_dynamics/report/report_file.hpp"
 #include "sections.hpp"
 
 namespace gear_dynamics {

@@ -6,9 +6,11 @@
 #include <CLI/CLI.hpp>
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <limits>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -31,6 +33,34 @@ inline void parse_or_exit(CLI::App& app, int argc, char** argv) {
     std::fprintf(stderr, "%s: %s (%s --help)\n", app.get_name().c_str(), e.what(), app.get_name().c_str());
     std::exit(1);
   }
+}
+
+// A number in [lo, hi] (hi omitted: no upper bound). CLI11 refuses any other value as
+// "--name: VALUE is out of range; allowed ...", naming the option, the value and the range.
+inline CLI::Validator in_range(double lo, double hi = std::numeric_limits<double>::infinity()) {
+  std::ostringstream allowed;
+  if (std::isinf(hi)) allowed << ">= " << lo;
+  else allowed << "[" << lo << ", " << hi << "]";
+  return CLI::Validator(
+      [lo, hi, range = allowed.str()](std::string& text) -> std::string {
+        double v = 0.0;
+        if (!CLI::detail::lexical_cast(text, v)) return text + " is not a number";
+        if (!(v >= lo && v <= hi)) return text + " is out of range; allowed " + range;
+        return "";
+      },
+      allowed.str());
+}
+
+// A number > 0.
+inline CLI::Validator positive() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        double v = 0.0;
+        if (!CLI::detail::lexical_cast(text, v)) return text + " is not a number";
+        if (!(v > 0.0)) return text + " is out of range; allowed > 0";
+        return "";
+      },
+      "> 0");
 }
 
 // One value per occurrence, repeatable: --config a.yaml --config b.yaml.

@@ -5,6 +5,7 @@
 
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/dynamics/bifurcation.hpp"
+#include "gear_dynamics/model/mesh_table.hpp"
 
 namespace gd = gear_dynamics;
 
@@ -57,6 +58,31 @@ TEST(Bifurcation, HighLoadIsPeriodOne) {
     EXPECT_EQ(v.period, 1) << v.value;
     EXPECT_GE(v.points.size(), 60u);
   }
+}
+
+// A cracked pinion tooth makes the mesh repeat after one pinion revolution (Z1 = 20 mesh periods).
+// At a load where the teeth never separate the motion is locked to that forcing, so its Poincare
+// points repeat after 20 mesh periods and not before: a period test stopping at 16 calls it
+// aperiodic, the scan (which tests up to the schedule's period) finds 20. Tolerance as the scan's,
+// 1e-3 of (b, v_ref); the crack changes K by far more than that per revolution.
+TEST(Bifurcation, CrackedPinionIsPeriodOfOneRevolution) {
+  gd::ModelConfig base = paper_config();
+  base.gear.mesh_stiffness = gd::MeshStiffnessModel::kPotentialEnergy;
+  base.gear.crack.gear = gd::FaultyGear::kPinion;
+  base.gear.crack.depth = 1e-3;
+  ASSERT_EQ(gd::schedule_mesh_periods(base.gear), base.gear.pinion_teeth);
+  EXPECT_EQ(gd::period_search_limit(base.gear, 16), base.gear.pinion_teeth);
+  gd::ScanOptions o;
+  o.duration = 0.6;
+  o.transient = 0.4;
+  const auto r = gd::bifurcation_scan(base, gd::ScanParameter::Load, {20000.0}, o);
+  ASSERT_EQ(r.size(), 1u);
+  ASSERT_GE(r[0].points.size(), 2u * base.gear.pinion_teeth);
+  EXPECT_GT(r[0].min_gap, 0.0);
+  EXPECT_EQ(r[0].period, base.gear.pinion_teeth);
+  EXPECT_EQ(r[0].regime, "period-20, no separation");
+  const double b = base.gear.backlash, vref = std::sqrt(2.0 * 20000.0 * b);
+  EXPECT_EQ(gd::detect_period(r[0].points, 16, {1e-3 * b, 1e-3 * vref}), 0);
 }
 
 // The speed path (GearLanes, one block per value) gives the same points as the Ensemble path for

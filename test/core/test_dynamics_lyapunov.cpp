@@ -124,6 +124,29 @@ TEST(LyapunovSpectrum, StaticContactIsTheLinearisedOscillator) {
   EXPECT_NEAR(r.windows[1].exponent[0], expected, 1e-3 * std::abs(expected));
 }
 
+// last_separation, the last grid time with delta - e <= b (what gear_analyze lyapunov counts as
+// absorbed into permanent contact): 0 for a lane resting in contact; for a lane released from
+// delta = 0 at rest, at least the last grid time before free flight (delta = Phi t^2 / 2, no
+// contact force while apart) first reaches b; for S1's rattle (paper's parameters), within the
+// last mesh period of the run.
+TEST(LyapunovSpectrum, LastSeparation) {
+  const double load = 20.0, h = 1e-6;
+  const gd::GearPair g = gd::derive(frozen_lane(load, 0, 0).gear);
+  gd::SpectrumOptions o;
+  o.duration = 0.05;
+  const double xs = load / (g.q3 * g.k1);
+  EXPECT_EQ(gd::lyapunov_spectrum(frozen_lane(load, g.in.backlash + xs, 0.0), h, o).last_separation, 0.0);
+  const double flight = std::sqrt(2.0 * g.in.backlash / load);
+  ASSERT_LT(flight, o.duration);
+  EXPECT_GE(gd::lyapunov_spectrum(frozen_lane(load, 0.0, 0.0), h, o).last_separation,
+            std::floor(flight / h) * h - 1e-12);
+  const gd::ModelConfig c = paper_config();
+  o.duration = 0.2;
+  const gd::LyapunovSpectrum s1 =
+      gd::lyapunov_spectrum({c.gear, c.friction_coefficient, c.load.initial_mean, c.initial}, c.run.time_step, o);
+  EXPECT_GT(s1.last_separation, o.duration - gd::mesh_period(gd::derive(c.gear)));
+}
+
 // The tangent of the located scheme against central differences of two perturbed trajectories of
 // the same production kernel over 2 ms of S1's start-up rattle (contacts, rebounds, switches). The
 // located map is smooth in the initial state; its derivative differs from the tangent carried

@@ -23,14 +23,14 @@ struct ScanOptions {
   double duration = 2.0;        // [s]
   double transient = 1.0;       // [s] discarded
   int block_lanes = 8;          // lanes (parameter values) per block
-  int max_period = 16;          // periods tested for periodicity
+  int max_period = 16;          // periods tested for periodicity, raised to the mesh schedule's period
   double tolerance = 1e-3;      // periodicity: |x_{k+p} - x_k| <= tolerance * (b, v_ref) per component
 };
 
 struct ScanValue {
   double value = 0;
   std::vector<SectionState> points;  // lane is 0
-  int period = 0;              // smallest p <= max_period with x_{k+p} = x_k (tolerance); 0 = none found
+  int period = 0;              // smallest p <= period_search_limit with x_{k+p} = x_k (tolerance); 0 = none
   double min_gap = 0;          // min over the kept window of delta - b [m]; > 0: the teeth never separate
   double min_delta = 0;        // min delta over the kept window [m]; < -b: back-flank contact
   // "<motion>, <contact>": motion "period-p" or "aperiodic"; contact "no separation" (delta > b
@@ -43,6 +43,11 @@ std::vector<ScanValue> bifurcation_scan(const ModelConfig& base, ScanParameter p
 
 // The configuration with one parameter set (speed in rpm); validated by the config layer's rules.
 ModelConfig with_parameter(const ModelConfig& base, ScanParameter parameter, double value);
+
+// The periods to test of a gear's Poincare points (one per mesh period): at least `at_least`, and
+// at least the mesh schedule's period (schedule_mesh_periods: e.g. Z1 with a cracked pinion tooth),
+// since a motion locked to the forcing repeats only after it.
+int period_search_limit(const GearInputs& gear, int at_least);
 
 // Smallest period p <= max_period of a sequence of Poincare points (scaled tolerance), 0 if none.
 int detect_period(const std::vector<SectionState>& points, int max_period, const std::vector<double>& tolerance);

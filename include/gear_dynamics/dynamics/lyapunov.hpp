@@ -41,6 +41,9 @@ struct LyapunovSpectrum {
   std::vector<SpectrumEdge> edges;
   std::vector<SpectrumWindow> windows;  // between consecutive edges
   std::vector<double> time, running;    // running estimate of lambda1 over [0, t]
+  // The last grid time at which delta - e <= b (teeth apart or on the back flank) [s]; 0 if never
+  // after t = 0. A run with duration - last_separation long is in permanent contact since then.
+  double last_separation = 0;
 };
 
 // The exponents over [from.time, to.time] from the sums at two edges.

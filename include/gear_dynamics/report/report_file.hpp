@@ -1,6 +1,6 @@
-// One file of the report, as every writer of the report layer opens it: created (or the report
-// fails naming it), listed in `written`, an optional header line, closed and checked when it goes
-// out of scope. Internal to the report layer.
+// One CSV or text file as every writer of report files opens it (the batch report, gear_analyze):
+// created (or the writer fails naming it), listed in `written`, an optional header line, closed
+// and checked when it goes out of scope.
 #pragma once
 
 #include <exception>
