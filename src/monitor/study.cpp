@@ -114,6 +114,13 @@ StudyResult run_study(const ModelConfig& config, const StudySettings& settings) 
   validate(settings);
   if (config.gear.crack.gear == FaultyGear::kNone)
     throw std::invalid_argument("gear_pair.crack_gear = none: the study needs the crack's gear (pinion or wheel)");
+  // Every depth checked before the reference's runs: a depth beyond the tooth's centre line is
+  // refused at once, naming the key.
+  for (double depth : settings.crack_depths) {
+    ModelConfig at = config;
+    at.gear.crack.depth = depth;
+    validate_consistency(at);
+  }
   StudyResult result;
   double t0 = cpu_seconds();
   result.reference = build_reference(config, settings.reference);
@@ -126,7 +133,6 @@ StudyResult run_study(const ModelConfig& config, const StudySettings& settings) 
       ModelConfig at = config;
       at.load.initial_mean = band.load;
       at.gear.crack.depth = depth;
-      validate_consistency(at);  // a depth beyond the tooth's centre line is refused here, naming the key
       t0 = cpu_seconds();
       const auto runs = simulate_windows(at, m, settings.first_test, settings.test_realizations,
                                          settings.reference.warmup, settings.reference.windows);
