@@ -504,6 +504,9 @@ TEST(Bearings, SimulateDoesNotDependOnBlocksOrThreads) {
     std::vector<double> v{r.center_distance, r.delta_range, r.delta_dot_range, r.steady_state_time,
                           r.steady_state_time_fine, r.final_delta, r.final_delta_dot, r.final_load};
     for (const gd::SnapshotState& s : r.snapshots) v.insert(v.end(), {s.time, s.delta, s.delta_dot, s.load});
+    for (const gd::ForceStatistics& f : {r.bearings->mesh_force, r.bearings->pinion_fx, r.bearings->pinion_fy,
+                                         r.bearings->wheel_fx, r.bearings->wheel_fy})
+      v.insert(v.end(), {f.mean, f.rms});
     return v;
   };
   for (std::size_t i = 0; i < serial.size(); ++i) {
@@ -512,4 +515,35 @@ TEST(Bearings, SimulateDoesNotDependOnBlocksOrThreads) {
     EXPECT_EQ(std::memcmp(x.data(), y.data(), sizeof(double) * x.size()), 0) << "realization " << i;
     EXPECT_GT(serial[i].delta_range, 0.0);
   }
+}
+
+// simulate()'s bearing forces against the static balance: at a constant load Phi in permanent
+// contact and mu = 0, the mean over the window of the mesh force is m_e Phi = Phi / q3 (the torsional
+// line averaged: mean delta_t_ddot = (delta_t_dot(T) - delta_t_dot(T - W)) / W, which the steady
+// periodic response keeps below 1e-3 of Phi here), the wheel's bearing carries it along +y and the
+// pinion's along -y (their y accelerations average out the same way), and nothing acts along x. The
+// RMS is at least the mean's magnitude and, with the mesh stiffness varying, above it.
+TEST(Bearings, WindowForcesAreTheStaticMeshLoad) {
+  const gd::ModelConfig c = shipped();
+  const gd::GearPair g = gd::derive(bearings_inputs(c));
+  gd::RunSettings run;
+  run.time_step = c.run.time_step;
+  run.duration = 0.06;  // the bearings' damping (zeta_b = 0.05 at >= 1.2 kHz) settles in 10 ms
+  run.window = 0.02;
+  run.snapshot_times = {};
+  const double load = 2.0e4;  // about 1 kN: the teeth stay in contact
+  gd::Ensemble e(g, run.time_step, c.initial, {s1(load, 0.0)}, c.seed);
+  const gd::RunResult r = gd::simulate(e, run).at(0);
+  ASSERT_TRUE(r.bearings.has_value());
+  const gd::BearingForces& f = *r.bearings;
+  const double static_force = load / g.q3;
+  EXPECT_NEAR(f.mesh_force.mean, static_force, 2e-3 * static_force);
+  EXPECT_NEAR(f.wheel_fy.mean, static_force, 2e-3 * static_force);
+  EXPECT_NEAR(f.pinion_fy.mean, -static_force, 2e-3 * static_force);
+  EXPECT_EQ(f.pinion_fx.rms, 0.0);
+  EXPECT_EQ(f.wheel_fx.rms, 0.0);
+  EXPECT_GT(f.mesh_force.rms, std::fabs(f.mesh_force.mean));
+  EXPECT_GE(f.wheel_fy.rms, std::fabs(f.wheel_fy.mean));
+  std::printf("static m_e Phi = %.6g N; window mean F_m %.6g, wheel fy %.6g, pinion fy %.6g N; RMS F_m %.6g N\n",
+              static_force, f.mesh_force.mean, f.wheel_fy.mean, f.pinion_fy.mean, f.mesh_force.rms);
 }
