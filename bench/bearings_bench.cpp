@@ -1,5 +1,6 @@
 // gear_bearings_bench: the cost of a realization-step of the bearings model against the torsional
-// model's, both paths of it: the SIMD ensemble (cost per lane) and the one-lane Realization. S1 and
+// model's, both paths of it: the SIMD ensemble (cost per lane) and the one-lane Realization; and
+// the bearings model in the ensemble (its lanes stepped one after the other). S1 and
 // stochastic realizations of the default configuration at a given load; prints CPU ns per step.
 #include <ctime>
 #include <cstdio>
@@ -53,12 +54,18 @@ int main(int argc, char** argv) try {
       for (std::int64_t n = 0; n < steps; ++n) r.step();
     }
   });
+  const double bear_ensemble = ns_per_step([&] {
+    gd::Ensemble e(gd::derive(bearings), h, c.initial, specs, c.seed);
+    for (std::int64_t n = 0; n < steps; ++n) e.step();
+  });
   std::printf("Phi0 %g m/s^2, mu %g, %d realizations x %lld steps of %g s\n", c.load.initial_mean,
               c.friction_coefficient, lanes, static_cast<long long>(steps), h);
   std::printf("torsional, ensemble (SIMD lanes): %.2f ns CPU per realization-step\n", ensemble);
   std::printf("torsional, one lane (Realization): %.2f ns\n", one_lane);
   std::printf("bearings (BearingsRealization):    %.2f ns  (x%.2f the ensemble, x%.2f the one lane)\n", bear,
               bear / ensemble, bear / one_lane);
+  std::printf("bearings, ensemble (lane by lane):  %.2f ns  (x%.2f the torsional ensemble)\n", bear_ensemble,
+              bear_ensemble / ensemble);
   return 0;
 } catch (const std::exception& e) {
   std::fprintf(stderr, "gear_bearings_bench: %s\n", e.what());

@@ -73,89 +73,86 @@ double friction_share(const GearPair& gear, const MeshTable* table, double a) {
   return 0.5 * (ref + sign(gear.x_a + gear.base_radius1 * (phi - gear.single_pair_angle)));
 }
 
-BearingsRealization::BearingsRealization(const GearPair& gear, double time_step, const InitialState& initial,
-                                         const LaneSpec& lane, std::uint64_t seed)
-    : gear_(gear), model_(gear), mesh_(gear, time_step), h_(time_step), sqrt_h_(std::sqrt(time_step)),
-      initial_(initial), spec_(lane), stream_(seed, lane.realization) {
-  if (!spec_.stochastic && (spec_.sigma != 0.0 || spec_.load_sd != 0.0))
-    throw std::invalid_argument("BearingsRealization: a lane without a random stream needs sigma = 0 and load_sd = 0");
-  reset();
-}
-
-void BearingsRealization::reset() {
-  n_ = 0;
-  crossings_ = 0;
-  refill_normals(0);
-  y_ = State::Zero();
-  y_[BearingsModel::kDelta] = initial_.deflection;
-  y_[BearingsModel::kDeltaDot] = initial_.velocity;
-  load_ = spec_.load_mean + spec_.load_sd * normals_[0];  // as Realization::reset
-}
-
-void BearingsRealization::refill_normals(std::uint64_t first_index) {
-  normals_first_ = first_index;
-  if (spec_.stochastic) stream_.fill(first_index, normals_, kNormalChunk);
-}
-
-int BearingsRealization::advance(std::int64_t n, double load0, double load1, State& y) const {
-  const StepPlan plan = mesh_.plan(n);
-  const double q3 = gear_.q3, mu = spec_.mu;
-  const double speed = gear_.in.pinion_speed, a_start = gear_.in.mesh_phase + speed * static_cast<double>(n) * h_;
-  const MeshTable* table = mesh_.table();
+int bearings_step(const BearingsModel& model, const GearPair& gear, const MeshSchedule& mesh, double h, double mu,
+                  std::int64_t n, double load0, double load1, BearingsModel::State& y) {
+  const StepPlan plan = mesh.plan(n);
+  const double q3 = gear.q3;
+  const double speed = gear.in.pinion_speed, a_start = gear.in.mesh_phase + speed * static_cast<double>(n) * h;
+  const MeshTable* table = mesh.table();
   int crossings = 0;
   for (int k = 0; k < plan.segments; ++k) {
     const StepSegment& seg = plan.segment[k];
-    const double H = (seg.end - seg.begin) * h_;
+    const double H = (seg.end - seg.begin) * h;
     const kernel::SegmentLoads<double> l = kernel::segment_loads<double>(seg, q3, mu, load0, load1);
     // sigma at the stage times, a billionth of the segment inside it (its side of a jump).
     const double inset = 1e-9 * (seg.end - seg.begin);
     const auto share = [&](double u) {
-      return mu == 0.0 ? 0.0 : mu * friction_share(gear_, table, a_start + speed * h_ * u);
+      return mu == 0.0 ? 0.0 : mu * friction_share(gear, table, a_start + speed * h * u);
     };
     const double e_dot = (seg.error_end - seg.error_start) / H;
     const double mid = 0.5 * (seg.begin + seg.end);
     model_step::Segment s{H,
-                          gear_.in.backlash,
+                          gear.in.backlash,
                           {seg.stiffness_start, l.qa, share(seg.begin + inset), l.la, seg.error_start, e_dot},
                           {seg.stiffness_mid, l.qm, share(mid), 0.5 * (l.la + l.lb),
                            0.5 * (seg.error_start + seg.error_end), e_dot},
                           {seg.stiffness_end, l.qb, share(seg.end - inset), l.lb, seg.error_end, e_dot}};
-    crossings += model_step::located_segment(model_, s, y);
+    crossings += model_step::located_segment(model, s, y);
   }
   return crossings;
 }
 
+BearingsOutputs bearings_outputs(const BearingsModel& model, const GearPair& gear, const MeshSchedule& mesh,
+                                 double h, std::int64_t n, const BearingsModel::State& y) {
+  const double t = static_cast<double>(n) * h;
+  const double e = mesh.transmission_error(t);
+  const double e_dot = (mesh.transmission_error(t + h) - e) / h;
+  const double dm = model.deflection(y);
+  model_step::MeshPoint p{mesh.stiffness(t), 0.0, 0.0, 0.0, e, e_dot};
+  const BearingParameters& b = model.bearings();
+  using M = BearingsModel;
+  return {dm,
+          model.deflection_rate(y),
+          model.mesh_force(model_step::branch_of(dm, e, gear.in.backlash), y, p),
+          b.stiffness * y[M::kPinionX] + b.pinion_damping * y[M::kPinionXDot],
+          b.stiffness * y[M::kPinionY] + b.pinion_damping * y[M::kPinionYDot],
+          b.stiffness * y[M::kWheelX] + b.wheel_damping * y[M::kWheelXDot],
+          b.stiffness * y[M::kWheelY] + b.wheel_damping * y[M::kWheelYDot]};
+}
+
+BearingsOutputs bearings_outputs(const Ensemble& ensemble, int lane) {
+  const BearingsModel::State y = ensemble.model_state().col(lane);
+  return bearings_outputs(BearingsModel(ensemble.gear()), ensemble.gear(), ensemble.mesh(), ensemble.time_step(),
+                          ensemble.step_index(), y);
+}
+
+BearingsRealization::BearingsRealization(const GearPair& gear, double time_step, const InitialState& initial,
+                                         const LaneSpec& lane, std::uint64_t seed)
+    : RealizationBase(gear, time_step, initial, lane, seed), model_(gear) {
+  reset();
+}
+
+void BearingsRealization::reset() {
+  restart();
+  crossings_ = 0;
+  y_ = State::Zero();
+  y_[BearingsModel::kDelta] = initial_.deflection;
+  y_[BearingsModel::kDeltaDot] = initial_.velocity;
+}
+
 void BearingsRealization::step() {
-  const auto index = static_cast<std::uint64_t>(n_) + 1;  // the normal of this step, as Realization's
-  if (index >= normals_first_ + kNormalChunk) refill_normals(normals_first_ + kNormalChunk);
-  const double z = normals_[index - normals_first_];
-  const double load1 = kernel::load_next<double>(load_, spec_.drift, spec_.sigma, z, h_, sqrt_h_);
+  const double load1 = next_load(next_normal());
   crossings_ += advance(n_, load_, load1, y_);
   load_ = load1;
   ++n_;
-  if (!y_.allFinite()) {
-    std::ostringstream msg;
-    msg << "gear model (bearings) diverged: realization " << spec_.realization << " (mu " << spec_.mu
-        << ") has delta_m = " << model_.deflection(y_) << " m at t = " << time() << " s";
-    throw DivergenceError(msg.str(), 0, spec_.realization, time());
-  }
+  if (!y_.allFinite()) throw bearings_divergence(spec_.realization, 0, model_.deflection(y_), time());
 }
 
-BearingsOutputs BearingsRealization::outputs() const {
-  const double t = time();
-  const double e = mesh_.transmission_error(t);
-  const double e_dot = (mesh_.transmission_error(t + h_) - e) / h_;
-  const double dm = model_.deflection(y_);
-  model_step::MeshPoint p{mesh_.stiffness(t), 0.0, 0.0, 0.0, e, e_dot};
-  const BearingParameters& b = model_.bearings();
-  using M = BearingsModel;
-  return {dm,
-          model_.deflection_rate(y_),
-          model_.mesh_force(model_step::branch_of(dm, e, gear_.in.backlash), y_, p),
-          b.stiffness * y_[M::kPinionX] + b.pinion_damping * y_[M::kPinionXDot],
-          b.stiffness * y_[M::kPinionY] + b.pinion_damping * y_[M::kPinionYDot],
-          b.stiffness * y_[M::kWheelX] + b.wheel_damping * y_[M::kWheelXDot],
-          b.stiffness * y_[M::kWheelY] + b.wheel_damping * y_[M::kWheelYDot]};
+DivergenceError bearings_divergence(std::uint64_t realization, int lane, double delta_m, double time) {
+  std::ostringstream msg;
+  msg << "gear model (bearings) diverged: realization " << realization << " (lane " << lane << ") has delta_m = "
+      << delta_m << " m at t = " << time << " s";
+  return DivergenceError(msg.str(), lane, realization, time);
 }
 
 }  // namespace gear_dynamics

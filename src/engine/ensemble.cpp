@@ -5,6 +5,9 @@
 #include <cmath>
 #include <sstream>
 
+#include "gear_dynamics/engine/bearings.hpp"
+#include "gear_dynamics/engine/rk4_kernel.hpp"
+
 namespace gear_dynamics {
 
 namespace {
@@ -20,9 +23,6 @@ Ensemble::Ensemble(const GearPair& gear, double time_step, const InitialState& i
     : gear_(gear), mesh_(gear, time_step), h_(time_step), initial_(initial), spec_(std::move(lanes)),
       seed_(seed) {
   if (spec_.empty()) throw std::invalid_argument("Ensemble: a block needs at least one lane");
-  if (gear.in.model != GearModel::kTorsional)  // BearingsRealization steps it (engine/bearings.hpp)
-    throw std::invalid_argument(
-        "gear_pair.model = bearings: the ensemble (batch) runs the torsional model only; gear_run runs bearings");
   for (const LaneSpec& s : spec_) {
     if (!s.stochastic && (s.sigma != 0.0 || s.load_sd != 0.0))
       throw std::invalid_argument("Ensemble: a lane without a random stream needs sigma = 0 and load_sd = 0");
@@ -49,6 +49,7 @@ Ensemble::Ensemble(const GearPair& gear, double time_step, const InitialState& i
   sigma_.setZero(p);
   drift_.setZero(p);
   normals_.setZero(p, kNormalChunk);
+  if (gear.in.model == GearModel::kBearings) model_state_.setZero(BearingsModel::kStates, static_cast<Eigen::Index>(spec_.size()));
   reset();
 }
 
@@ -64,6 +65,11 @@ void Ensemble::reset() {
     mu_[i] = s.mu;
     sigma_[i] = s.sigma;
     drift_[i] = s.drift;
+  }
+  if (model_state_.size() > 0) {  // at rest on the bearings: delta_m = delta_t
+    model_state_.setZero();
+    model_state_.row(BearingsModel::kDelta).setConstant(initial_.deflection);
+    model_state_.row(BearingsModel::kDeltaDot).setConstant(initial_.velocity);
   }
 }
 
@@ -84,6 +90,9 @@ void Ensemble::set_load(int lane, double load) {
 
 void Ensemble::set_state(int lane, double delta, double velocity) {
   if (lane < 0 || lane >= lanes()) throw std::out_of_range("Ensemble::set_state: no such lane");
+  if (model_state_.size() > 0)
+    throw std::invalid_argument("Ensemble::set_state: gear_pair.model = bearings has no (delta, delta_dot) state; "
+                                "allowed: torsional");
   delta_[lane] = delta;
   velocity_[lane] = velocity;
 }
@@ -99,6 +108,10 @@ void Ensemble::refill_normals(std::uint64_t first_index) {
 void Ensemble::step() {
   const auto index = static_cast<std::uint64_t>(n_) + 1;  // normal of this step
   if (index >= normals_first_ + kNormalChunk) refill_normals(normals_first_ + kNormalChunk);
+  if (model_state_.size() > 0) {
+    step_bearings(static_cast<Eigen::Index>(index - normals_first_));
+    return;
+  }
   // The lanes' arithmetic runs in the instruction-set variant chosen for the process
   // (src/engine/dispatched/ensemble_step.cpp).
   const dispatch::EnsembleStep lanes{&mesh_,
@@ -119,6 +132,24 @@ void Ensemble::step() {
   const bool finite = dispatch::kernels().ensemble_step(lanes);
   ++n_;
   if (!finite) report_divergence();
+}
+
+void Ensemble::step_bearings(Eigen::Index column) {
+  // Lane by lane, each one BearingsRealization's arithmetic (the same load step and bearings_step), so
+  // that a realization's bits depend neither on its block nor on its lane.
+  const BearingsModel model(gear_);
+  const double sqrt_h = std::sqrt(h_);
+  for (int i = 0; i < lanes(); ++i) {
+    BearingsModel::State y = model_state_.col(i);
+    const double load1 = kernel::load_next<double>(load_[i], drift_[i], sigma_[i], normals_(i, column), h_, sqrt_h);
+    bearings_step(model, gear_, mesh_, h_, mu_[i], n_, load_[i], load1, y);
+    model_state_.col(i) = y;
+    delta_[i] = model.deflection(y);
+    velocity_[i] = model.deflection_rate(y);
+    load_[i] = load1;
+    if (!y.allFinite()) throw bearings_divergence(spec_[i].realization, i, delta_[i], static_cast<double>(n_ + 1) * h_);
+  }
+  ++n_;
 }
 
 void Ensemble::report_divergence() const {

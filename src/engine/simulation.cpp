@@ -4,9 +4,41 @@
 #include <numeric>
 #include <optional>
 
+#include "gear_dynamics/engine/bearings.hpp"
 #include "gear_dynamics/engine/observers.hpp"
 
 namespace gear_dynamics {
+
+namespace {
+
+// Sums of the bearings model's forces and of their squares over the window, per lane.
+class BearingForceSums {
+ public:
+  explicit BearingForceSums(int lanes) : sum_(Eigen::ArrayXXd::Zero(kForces, lanes)), square_(sum_) {}
+  void observe(const Ensemble& e) {
+    for (int i = 0; i < e.lanes(); ++i) {
+      const BearingsOutputs o = bearings_outputs(e, i);
+      const Eigen::Array<double, kForces, 1> f(o.mesh_force, o.pinion_fx, o.pinion_fy, o.wheel_fx, o.wheel_fy);
+      sum_.col(i) += f;
+      square_.col(i) += f * f;
+    }
+    ++count_;
+  }
+  BearingForces result(int lane) const {
+    const auto stats = [&](int k) {
+      const double n = static_cast<double>(count_);
+      return ForceStatistics{sum_(k, lane) / n, std::sqrt(square_(k, lane) / n)};
+    };
+    return {stats(0), stats(1), stats(2), stats(3), stats(4)};
+  }
+
+ private:
+  static constexpr int kForces = 5;
+  Eigen::ArrayXXd sum_, square_;
+  std::int64_t count_ = 0;
+};
+
+}  // namespace
 
 std::int64_t RunSettings::steps() const { return steps_for(duration); }
 
@@ -44,6 +76,10 @@ std::vector<RunResult> simulate(Ensemble& ensemble, const RunSettings& settings,
   if (section.period > 0)
     poincare.emplace(lanes, settings.time_step, section.period, section.offset, settings.duration);
 
+  std::optional<BearingForceSums> forces;
+  if (ensemble.model_state().size() > 0) forces.emplace(lanes);
+  const std::int64_t window_from = total - window;
+
   // Only the windows that are ever read need the sliding observer: the last one, or all of them
   // when recording.
   const std::int64_t range_from = recorder.every > 0 ? 0 : total - window;
@@ -63,6 +99,7 @@ std::vector<RunResult> simulate(Ensemble& ensemble, const RunSettings& settings,
       settle_fine.observe_packet(t, p, d);
       if (ranged) range.observe_packet(p, d, Packet(Eigen::Map<const Packet>(velocity + p)));
     }
+    if (forces && n >= window_from) forces->observe(ensemble);
     if (snaps.due(n)) snaps.observe(n, ensemble.delta(), ensemble.velocity(), ensemble.load());
     if (poincare) poincare->observe(n, ensemble.delta(), ensemble.velocity());
     if (n == next_record) {
@@ -93,6 +130,7 @@ std::vector<RunResult> simulate(Ensemble& ensemble, const RunSettings& settings,
     r.final_delta_dot = ensemble.velocity()[i];
     r.final_load = ensemble.load()[i];
     if (poincare) r.section = poincare->points()[static_cast<std::size_t>(i)];
+    if (forces) r.bearings = forces->result(i);
     for (std::size_t k = 0; k < snaps.taken(); ++k) {
       const auto kk = static_cast<Eigen::Index>(k);
       r.snapshots.push_back({static_cast<double>(snapshot_steps[k]) * settings.time_step,

@@ -1,6 +1,9 @@
 #include "gear_dynamics/report/report.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -399,6 +402,60 @@ void ReportFiles::md_left_out(std::ostream& r) const {
   }
 }
 
+// gear_pair.model = bearings: bearing_forces.csv, one row per run and force (the window's mean and
+// RMS), and the report.md section of their statistics over each group's runs [N]. "" and no file
+// for a batch of the torsional model.
+std::string write_bearing_forces(const fs::path& dir, const BatchInputs& in, const BatchAnalysis& a,
+                                 std::vector<std::string>& written) {
+  const bool any = std::any_of(in.runs.begin(), in.runs.end(), [](const RunRecord& r) { return r.bearings.has_value(); });
+  if (!any) return "";
+  const char* names[] = {"mesh_force", "pinion_fx", "pinion_fy", "wheel_fx", "wheel_fy"};
+  const auto forces = [](const BearingForces& f) {
+    return std::array<ForceStatistics, 5>{f.mesh_force, f.pinion_fx, f.pinion_fy, f.wheel_fx, f.wheel_fy};
+  };
+  const std::string kh = a.key_header.empty() ? "mu" : a.key_header;
+  const auto key = [&](const RunRecord& r) { return r.point < a.keys.size() ? a.keys[r.point] : general(r.mu); };
+  {
+    ReportFile c(dir / "bearing_forces.csv", written, "name,kind," + kh + ",force,mean[N],rms[N]");
+    for (const RunRecord& r : in.runs) {
+      if (!r.bearings) continue;
+      const auto f = forces(*r.bearings);
+      for (std::size_t k = 0; k < f.size(); ++k) c.row(r.name, to_string(r.kind), key(r), names[k], f[k].mean, f[k].rms);
+    }
+  }
+  // Per group (mu or study point, in the order met) and force: the runs' mean of the window means,
+  // and the mean, sd, min and max of their RMS.
+  std::vector<std::size_t> order;
+  std::map<std::size_t, std::vector<const RunRecord*>> groups;
+  for (const RunRecord& r : in.runs) {
+    if (!r.bearings) continue;
+    if (groups.find(r.point) == groups.end()) order.push_back(r.point);
+    groups[r.point].push_back(&r);
+  }
+  std::ostringstream md;
+  md << "\n## Bearing forces (gear_pair.model: bearings)\n\n"
+     << "Over the window [T − W, T] of each run: the mesh force F_m and the force each body puts on its bearing, x "
+        "across the line of action and y along it (frames `pinion_bearing`, `wheel_bearing`; doc/model.md §11). "
+        "Mean of the runs' window means; mean ± sd [min, max] of their RMS, in N. Per run: "
+        "`bearing_forces.csv`.\n\n| " << kh << " | runs | force | mean | RMS |\n|---|---|---|---|---|\n";
+  for (std::size_t point : order) {
+    const std::vector<const RunRecord*>& runs = groups[point];
+    const double n = static_cast<double>(runs.size());
+    for (std::size_t k = 0; k < 5; ++k) {
+      double mean = 0, rms = 0, rms2 = 0, lo = INFINITY, hi = -INFINITY;
+      for (const RunRecord* r : runs) {
+        const ForceStatistics f = forces(*r->bearings)[k];
+        mean += f.mean / n, rms += f.rms / n, rms2 += f.rms * f.rms;
+        lo = std::min(lo, f.rms), hi = std::max(hi, f.rms);
+      }
+      const double sd = runs.size() > 1 ? std::sqrt(std::max(0.0, (rms2 - n * rms * rms) / (n - 1))) : 0.0;
+      md << "| " << key(*runs.front()) << " | " << runs.size() << " | " << names[k] << " | " << general(mean) << " | "
+         << general(rms) << " ± " << general(sd) << " [" << general(lo) << ", " << general(hi) << "] |\n";
+    }
+  }
+  return md.str();
+}
+
 void write_report_md(const ReportFiles& R, const std::string& sections) {
   ReportFile file(R.dir / "report.md", R.written);
   std::ostream& r = file.out();
@@ -424,7 +481,8 @@ std::vector<std::string> write_report(const std::string& folder, const BatchInpu
   fs::create_directories(dir, ec);
   if (ec) throw std::runtime_error("cannot create report folder " + folder + ": " + ec.message());
   std::vector<std::string> written;
-  const std::string sections = over_time ? write_over_time(folder, in, a, *over_time, written) : "";
+  const std::string sections = (over_time ? write_over_time(folder, in, a, *over_time, written) : "") +
+                               write_bearing_forces(dir, in, a, written);
   const AnalysisSettings& s = a.settings;
   const ReportFiles files{dir, in, a, s, paper_intervals(s), a.key_header.empty() ? "mu" : a.key_header,
                           std::to_string(static_cast<int>(std::lround(100 * s.confidence))) + " %", written};

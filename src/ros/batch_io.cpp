@@ -221,6 +221,13 @@ void BagSink::recorded(const std::vector<RunSpec>& block, const Ensemble& ensemb
   for (std::size_t i = 0; i < block.size(); ++i) {
     const int lane = static_cast<int>(i);
     items.push_back({block[i].id, make_state(ensemble, lane, center_distance[lane])});
+    if (ensemble.model_state().size() > 0) {  // gear_pair.model = bearings
+      const double t = grid_time(ensemble.step_index(), ensemble.time_step());
+      const BearingsOutputs o = bearings_outputs(ensemble, lane);
+      items.push_back({block[i].id, BearingsSample{make_mesh_state(t, o, ensemble.model_state()(BearingsModel::kDelta, lane)),
+                                                   make_bearing_wrench(t, kPinionBearingFrame, o.pinion_fx, o.pinion_fy),
+                                                   make_bearing_wrench(t, kWheelBearingFrame, o.wheel_fx, o.wheel_fy)}});
+    }
   }
   push(std::move(items));
 }
@@ -229,7 +236,8 @@ void BagSink::finished(const std::vector<RunSpec>& block, const std::vector<RunR
   std::vector<Item> items;
   for (std::size_t i = 0; i < block.size(); ++i) {
     const RunSpec& r = block[i];
-    Close close{{}, make_summary(r.name, r.kind, r.index, r.mu, r.mesh_phase, model_.run, results[i])};
+    Close close{{}, make_summary(r.name, r.kind, r.index, r.mu, r.mesh_phase, model_.run, results[i]), {}};
+    if (results[i].bearings) close.bearings = make_bearing_summary(r.name, model_.run, *results[i].bearings);
     if (r.kind != RunKind::Stochastic)  // the section of the deterministic runs only (doc/batch-folder.md §5)
       for (const SectionPoint& p : results[i].section) close.section.push_back(make_poincare_point(p));
     items.push_back({r.id, std::move(close)});
@@ -311,10 +319,16 @@ void BagSink::write_bag(Item& item) {
     b.bag->write(kRunInfoTopic, open->info.header.stamp - ros::Duration(0, 1), open->info);
   } else if (auto* state = std::get_if<GearState>(&item.what)) {
     open_.at(item.id).bag->write(kStateTopic, state->header.stamp, *state);
+  } else if (auto* sample = std::get_if<BearingsSample>(&item.what)) {
+    BagWriter& bag = *open_.at(item.id).bag;
+    bag.write(kMeshTopic, sample->mesh.header.stamp, sample->mesh);
+    bag.write(kPinionBearingTopic, sample->pinion.header.stamp, sample->pinion);
+    bag.write(kWheelBearingTopic, sample->wheel.header.stamp, sample->wheel);
   } else if (auto* close = std::get_if<Close>(&item.what)) {
     OpenBag& b = open_.at(item.id);
     for (const PoincarePoint& p : close->section) b.bag->write(kPoincareTopic, sim_stamp(p.t), p);
     b.bag->write(kSummaryTopic, close->summary.header.stamp + ros::Duration(0, 1), close->summary);
+    if (close->bearings) b.bag->write(kBearingSummaryTopic, close->bearings->header.stamp + ros::Duration(0, 1), *close->bearings);
     b.bag->close();
     fs::rename(active_path(folder_, b.name), bag_path(folder_, b.name));
     open_.erase(item.id);

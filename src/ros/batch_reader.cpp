@@ -120,6 +120,7 @@ struct BagContents {
   RunSummary summary;
   RunSeries series;  // every GearState, if asked for (SI)
   std::vector<double> section_t, section_delta, section_delta_dot;  // every PoincarePoint (SI)
+  std::vector<BearingSummary> bearings;  // the bearings model's window statistics (one, or none)
 };
 
 // Reads one bag (its states only if `states`) with `bag`, a
@@ -131,7 +132,7 @@ BagContents read_bag(rosbag::Bag& bag, const fs::path& path, bool states) {
     if (!ok) throw Skip(why);
   };
   bag.open(path.string(), rosbag::bagmode::Read);
-  std::vector<std::string> topics{kRunInfoTopic, kSummaryTopic, kPoincareTopic};
+  std::vector<std::string> topics{kRunInfoTopic, kSummaryTopic, kPoincareTopic, kBearingSummaryTopic};
   if (states) topics.emplace_back(kStateTopic);
   BagContents c;
   for (const rosbag::MessageInstance& m : rosbag::View(bag, rosbag::TopicQuery(topics))) {
@@ -152,6 +153,10 @@ BagContents read_bag(rosbag::Bag& bag, const fs::path& path, bool states) {
       c.section_t.push_back(p->t);
       c.section_delta.push_back(p->delta);
       c.section_delta_dot.push_back(p->delta_dot);
+    } else if (topic == kBearingSummaryTopic) {
+      const BearingSummary::ConstPtr b = m.instantiate<BearingSummary>();
+      require(b != nullptr, topic + " holds " + m.getDataType() + ", not gear_dynamics/BearingSummary");
+      c.bearings.push_back(*b);
     } else {
       const GearState::ConstPtr s = m.instantiate<GearState>();
       require(s != nullptr, topic + " holds " + m.getDataType() + ", not gear_dynamics/GearState");
@@ -180,6 +185,7 @@ void fields(Stream& stream, Contents& c) {
   stream.next(c.section_t);
   stream.next(c.section_delta);
   stream.next(c.section_delta_dot);
+  stream.next(c.bearings);
 }
 
 std::vector<std::uint8_t> serialize(const BagContents& c) {
@@ -469,6 +475,18 @@ RunRecord check_run(BagRead& read, const ManifestRun& e, const FolderManifest& m
   r.section_times = std::move(bag.section_t);
   r.section_delta = std::move(bag.section_delta);
   r.section_delta_dot = std::move(bag.section_delta_dot);
+  require(bag.bearings.size() <= 1, "has " + std::to_string(bag.bearings.size()) + " " + kBearingSummaryTopic +
+                                        " messages, expected at most 1");
+  if (!bag.bearings.empty()) {
+    const BearingSummary& b = bag.bearings.front();
+    require(b.run_name == e.name, std::string(kBearingSummaryTopic) + " is of run '" + b.run_name + "', not '" + e.name + "'");
+    r.bearings = BearingForces{{b.mesh_force_mean, b.mesh_force_rms}, {b.pinion_fx_mean, b.pinion_fx_rms},
+                               {b.pinion_fy_mean, b.pinion_fy_rms}, {b.wheel_fx_mean, b.wheel_fx_rms},
+                               {b.wheel_fy_mean, b.wheel_fy_rms}};
+    require(all_finite({b.mesh_force_mean, b.mesh_force_rms, b.pinion_fx_mean, b.pinion_fx_rms, b.pinion_fy_mean,
+                        b.pinion_fy_rms, b.wheel_fx_mean, b.wheel_fx_rms, b.wheel_fy_mean, b.wheel_fy_rms}),
+            std::string(kBearingSummaryTopic) + " holds a non-finite value");
+  }
   return r;
 }
 

@@ -52,11 +52,13 @@ YAML::Node yaml_from_namespace(const ros::NodeHandle& nh) {
 }
 
 ModelConfig load_model_config(const ros::NodeHandle& nh) {
-  ModelConfig c = parse_config(yaml_from_parameters(nh, {"gear_pair", "load", "run"}));
-  if (c.gear.model != GearModel::kTorsional)  // the nodes step the torsional model only (doc/architecture.md)
-    throw ConfigError("gear_pair.model = bearings is not run by the ROS nodes; allowed: torsional "
-                      "(gear_run runs bearings)");
-  return c;
+  return parse_config(yaml_from_parameters(nh, {"gear_pair", "load", "run"}));
+}
+
+void require_live_model(const ModelConfig& c) {
+  if (c.gear.model != GearModel::kTorsional)  // the live loop steps Realization (doc/architecture.md §2)
+    throw ConfigError("gear_pair.model = bearings is not run by gear_simulator; allowed: torsional "
+                      "(gear_run and the batch run bearings)");
 }
 
 RunInfo make_run_info(const ModelConfig& config, RunKind kind, std::uint32_t realization,
@@ -153,6 +155,39 @@ RunSummary make_summary(const std::string& run_name, RunKind kind,
     m.snapshot_delta_dot.push_back(s.delta_dot);
     m.snapshot_phi.push_back(s.load);
   }
+  return m;
+}
+
+MeshState make_mesh_state(double t, const BearingsOutputs& o, double delta_t) {
+  MeshState m;
+  m.header.stamp = sim_stamp(t);
+  m.t = t;
+  m.delta_m = o.delta_m;
+  m.delta_m_dot = o.delta_m_dot;
+  m.delta_t = delta_t;
+  m.mesh_force = o.mesh_force;
+  return m;
+}
+
+geometry_msgs::WrenchStamped make_bearing_wrench(double t, const char* frame, double fx, double fy) {
+  geometry_msgs::WrenchStamped m;
+  m.header.stamp = sim_stamp(t);
+  m.header.frame_id = frame;
+  m.wrench.force.x = fx;
+  m.wrench.force.y = fy;
+  return m;
+}
+
+BearingSummary make_bearing_summary(const std::string& run_name, const RunSettings& run, const BearingForces& f) {
+  BearingSummary m;
+  m.header.stamp = sim_stamp(run.duration);
+  m.run_name = run_name;
+  m.window_start = run.duration - run.window;
+  m.mesh_force_mean = f.mesh_force.mean, m.mesh_force_rms = f.mesh_force.rms;
+  m.pinion_fx_mean = f.pinion_fx.mean, m.pinion_fx_rms = f.pinion_fx.rms;
+  m.pinion_fy_mean = f.pinion_fy.mean, m.pinion_fy_rms = f.pinion_fy.rms;
+  m.wheel_fx_mean = f.wheel_fx.mean, m.wheel_fx_rms = f.wheel_fx.rms;
+  m.wheel_fy_mean = f.wheel_fy.mean, m.wheel_fy_rms = f.wheel_fy.rms;
   return m;
 }
 

@@ -97,7 +97,11 @@ void RefusingConfig::__clamp__() {
 GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& private_nh)
     : nh_(nh),
       private_nh_(private_nh),
-      config_(load_model_config(private_nh)),
+      config_([&] {
+        ModelConfig c = load_model_config(private_nh);
+        require_live_model(c);
+        return c;
+      }()),
       gear_(derive(config_.gear)),
       settings_(load_settings(private_nh, config_.run.time_step)),
       reconfigure_server_(reconfigure_mutex_, private_nh),

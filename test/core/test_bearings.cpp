@@ -9,11 +9,13 @@
 #include <cmath>
 #include <cstring>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/engine/bearings.hpp"
 #include "gear_dynamics/engine/realization.hpp"
+#include "gear_dynamics/engine/simulation.hpp"
 
 namespace gd = gear_dynamics;
 using M = gd::BearingsModel;
@@ -421,4 +423,127 @@ TEST(Bearings, RealizationRepeatsBitForBit) {
   EXPECT_EQ(std::memcmp(first.data(), again.data(), sizeof(double) * M::kStates), 0);
   EXPECT_EQ(std::memcmp(first.data(), later.data(), sizeof(double) * M::kStates), 0);
   EXPECT_NE(std::memcmp(first.data(), other.state().data(), sizeof(double) * M::kStates), 0);
+}
+
+namespace {
+
+bool same_state(const M::State& a, const M::State& b) {
+  return std::memcmp(a.data(), b.data(), sizeof(double) * M::kStates) == 0;
+}
+
+// Realizations 100 + i at mu 0.01 (i % 5) in a block of `lanes`, the first `first` of them left out
+// (a shard that starts later).
+std::vector<gd::LaneSpec> lanes_from(const gd::ModelConfig& c, int first, int lanes) {
+  std::vector<gd::LaneSpec> specs;
+  for (int i = first; i < first + lanes; ++i)
+    specs.push_back(gd::stochastic_lane(c, 0.01 * (i % 5), 100 + static_cast<std::uint64_t>(i)));
+  return specs;
+}
+
+}  // namespace
+
+// The ensemble runs the bearings model lane by lane through the same bearings_step as
+// BearingsRealization: every lane's whole state, delta_m, its rate and Phi are the realization's, bit
+// for bit, whatever the block's size and the lane's position in it.
+TEST(Bearings, EnsembleLanesAreTheRealizations) {
+  const gd::ModelConfig c = shipped();
+  const gd::GearPair g = gd::derive(bearings_inputs(c));
+  const std::vector<gd::LaneSpec> all = lanes_from(c, 0, 11);
+  std::vector<gd::BearingsRealization> alone;
+  for (const gd::LaneSpec& s : all) alone.emplace_back(g, c.run.time_step, c.initial, s, c.seed);
+  // One block of all 11 (two packets, the second padded), and shards of 3 + 8 starting at lane 3.
+  gd::Ensemble whole(g, c.run.time_step, c.initial, all, c.seed);
+  gd::Ensemble head(g, c.run.time_step, c.initial, lanes_from(c, 0, 3), c.seed);
+  gd::Ensemble tail(g, c.run.time_step, c.initial, lanes_from(c, 3, 8), c.seed);
+  std::int64_t crossings = 0;
+  for (int n = 0; n < 6000; ++n) {  // 6000 steps: past the first impacts at about 2.2 ms at the shipped h
+    whole.step(), head.step(), tail.step();
+    for (std::size_t i = 0; i < alone.size(); ++i) {
+      gd::BearingsRealization& r = alone[i];
+      const std::int64_t before = r.crossings();
+      r.step();
+      crossings += r.crossings() - before;
+      const int lane = static_cast<int>(i);
+      const gd::Ensemble& shard = i < 3 ? head : tail;
+      const int shard_lane = i < 3 ? lane : lane - 3;
+      const M::State in_whole = whole.model_state().col(lane), in_shard = shard.model_state().col(shard_lane);
+      ASSERT_TRUE(same_state(in_whole, r.state()) && same_state(in_shard, r.state())) << "lane " << i << " step " << n;
+      const double dm = r.model().deflection(r.state()), rate = r.model().deflection_rate(r.state()), load = r.load();
+      const double wd = whole.delta()[lane], wv = whole.velocity()[lane], wl = whole.load()[lane];
+      ASSERT_EQ(std::memcmp(&wd, &dm, sizeof dm), 0);
+      ASSERT_EQ(std::memcmp(&wv, &rate, sizeof rate), 0);
+      ASSERT_EQ(std::memcmp(&wl, &load, sizeof load), 0);
+    }
+  }
+  EXPECT_GT(crossings, 11) << "the lanes must have impacts for the test to cover the crossing search";
+  const gd::BearingsOutputs a = gd::bearings_outputs(whole, 7), b = alone[7].outputs();
+  EXPECT_EQ(std::memcmp(&a, &b, sizeof a), 0);
+}
+
+// simulate() over the bearings model, the same realizations in one block on one thread or in two
+// shards on two threads: every observer's result is the same, bit for bit.
+TEST(Bearings, SimulateDoesNotDependOnBlocksOrThreads) {
+  gd::ModelConfig c = shipped();
+  const gd::GearPair g = gd::derive(bearings_inputs(c));
+  gd::RunSettings run;
+  run.time_step = c.run.time_step;
+  run.duration = 0.01;
+  run.window = 0.004;
+  run.snapshot_times = {0.005, 0.01};
+  gd::Ensemble one(g, run.time_step, c.initial, lanes_from(c, 0, 6), c.seed);
+  const std::vector<gd::RunResult> serial = gd::simulate(one, run);
+  gd::Ensemble first(g, run.time_step, c.initial, lanes_from(c, 0, 2), c.seed);
+  gd::Ensemble second(g, run.time_step, c.initial, lanes_from(c, 2, 4), c.seed);
+  std::vector<gd::RunResult> a, b;
+  std::thread ta([&] { a = gd::simulate(first, run); });
+  std::thread tb([&] { b = gd::simulate(second, run); });
+  ta.join(), tb.join();
+  a.insert(a.end(), b.begin(), b.end());
+  ASSERT_EQ(a.size(), serial.size());
+  const auto bits = [](const gd::RunResult& r) {
+    std::vector<double> v{r.center_distance, r.delta_range, r.delta_dot_range, r.steady_state_time,
+                          r.steady_state_time_fine, r.final_delta, r.final_delta_dot, r.final_load};
+    for (const gd::SnapshotState& s : r.snapshots) v.insert(v.end(), {s.time, s.delta, s.delta_dot, s.load});
+    for (const gd::ForceStatistics& f : {r.bearings->mesh_force, r.bearings->pinion_fx, r.bearings->pinion_fy,
+                                         r.bearings->wheel_fx, r.bearings->wheel_fy})
+      v.insert(v.end(), {f.mean, f.rms});
+    return v;
+  };
+  for (std::size_t i = 0; i < serial.size(); ++i) {
+    const std::vector<double> x = bits(serial[i]), y = bits(a[i]);
+    ASSERT_EQ(x.size(), y.size());
+    EXPECT_EQ(std::memcmp(x.data(), y.data(), sizeof(double) * x.size()), 0) << "realization " << i;
+    EXPECT_GT(serial[i].delta_range, 0.0);
+  }
+}
+
+// simulate()'s bearing forces against the static balance: at a constant load Phi in permanent
+// contact and mu = 0, the mean over the window of the mesh force is m_e Phi = Phi / q3 (the torsional
+// line averaged: mean delta_t_ddot = (delta_t_dot(T) - delta_t_dot(T - W)) / W, which the steady
+// periodic response keeps below 1e-3 of Phi here), the wheel's bearing carries it along +y and the
+// pinion's along -y (their y accelerations average out the same way), and nothing acts along x. The
+// RMS is at least the mean's magnitude and, with the mesh stiffness varying, above it.
+TEST(Bearings, WindowForcesAreTheStaticMeshLoad) {
+  const gd::ModelConfig c = shipped();
+  const gd::GearPair g = gd::derive(bearings_inputs(c));
+  gd::RunSettings run;
+  run.time_step = c.run.time_step;
+  run.duration = 0.06;  // the bearings' damping (zeta_b = 0.05 at >= 1.2 kHz) settles in 10 ms
+  run.window = 0.02;
+  run.snapshot_times = {};
+  const double load = 2.0e4;  // about 1 kN: the teeth stay in contact
+  gd::Ensemble e(g, run.time_step, c.initial, {s1(load, 0.0)}, c.seed);
+  const gd::RunResult r = gd::simulate(e, run).at(0);
+  ASSERT_TRUE(r.bearings.has_value());
+  const gd::BearingForces& f = *r.bearings;
+  const double static_force = load / g.q3;
+  EXPECT_NEAR(f.mesh_force.mean, static_force, 2e-3 * static_force);
+  EXPECT_NEAR(f.wheel_fy.mean, static_force, 2e-3 * static_force);
+  EXPECT_NEAR(f.pinion_fy.mean, -static_force, 2e-3 * static_force);
+  EXPECT_EQ(f.pinion_fx.rms, 0.0);
+  EXPECT_EQ(f.wheel_fx.rms, 0.0);
+  EXPECT_GT(f.mesh_force.rms, std::fabs(f.mesh_force.mean));
+  EXPECT_GE(f.wheel_fy.rms, std::fabs(f.wheel_fy.mean));
+  std::printf("static m_e Phi = %.6g N; window mean F_m %.6g, wheel fy %.6g, pinion fy %.6g N; RMS F_m %.6g N\n",
+              static_force, f.mesh_force.mean, f.wheel_fy.mean, f.pinion_fy.mean, f.mesh_force.rms);
 }

@@ -39,7 +39,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 INCLUDE = re.compile(r'^\s*#\s*include\s*[<"]([^>"]+)[>"]', re.M)
 # Headers that mean ROS: the ROS client libraries and message packages, and the package's own
 # generated message and dynamic_reconfigure headers (gear_dynamics/Name.h).
-ROS_HEADER = re.compile(r"^(ros|rosbag|roscpp|std_msgs|std_srvs|rosgraph_msgs|diagnostic_msgs|diagnostic_updater|"
+ROS_HEADER = re.compile(r"^(ros|rosbag|roscpp|std_msgs|std_srvs|rosgraph_msgs|geometry_msgs|diagnostic_msgs|diagnostic_updater|"
                         r"dynamic_reconfigure|xmlrpcpp|message_filters)/|^gear_dynamics/[A-Z]\w*\.h$")
 
 

@@ -5,12 +5,14 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "gear_dynamics/batch/run_kind.hpp"
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/config/sweep.hpp"
+#include "gear_dynamics/engine/simulation.hpp"
 
 namespace gear_dynamics {
 
@@ -31,6 +33,8 @@ struct RunRecord {
   // phase 0 once per mesh period; empty for stochastic runs and in bags written before it was
   // recorded (doc/batch-folder.md §5). [s], [m], [m/s]
   std::vector<double> section_times, section_delta, section_delta_dot;
+  // gear_pair.model = bearings: the forces' mean and RMS over the window (/gear/bearing_summary) [N].
+  std::optional<BearingForces> bearings;
 };
 
 // Whether two values written by a batch are the same (mu, time step, duration): equal to 1e-12

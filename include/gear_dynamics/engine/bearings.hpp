@@ -12,6 +12,7 @@
 #include "gear_dynamics/engine/ensemble.hpp"
 #include "gear_dynamics/engine/model_step.hpp"
 #include "gear_dynamics/engine/normal_stream.hpp"
+#include "gear_dynamics/engine/realization.hpp"
 #include "gear_dynamics/model/gear_pair.hpp"
 #include "gear_dynamics/model/mesh_schedule.hpp"
 
@@ -88,13 +89,28 @@ struct BearingsOutputs {
   double pinion_fx, pinion_fy, wheel_fx, wheel_fy;
 };
 
-// One realization of the bearings model, as Realization is one of the torsional model: the same mesh
-// plan, the same random stream NormalStream(seed, realization) and load increments, so that Phi's
-// path is the torsional run's, bit for bit.
-class BearingsRealization {
+// Grid step n of one realization of the bearings model from y, with friction coefficient mu and the
+// load going from load0 to load1: the located segments of mesh.plan(n) (model_step::located_segment).
+// The one stepping path of BearingsRealization and of Ensemble's bearings lanes. Returns the
+// crossings of delta_m through +-b (+ e) located.
+int bearings_step(const BearingsModel& model, const GearPair& gear, const MeshSchedule& mesh, double time_step,
+                  double mu, std::int64_t n, double load0, double load1, BearingsModel::State& y);
+
+// The outputs of state y at grid step n (doc/model.md §11).
+BearingsOutputs bearings_outputs(const BearingsModel& model, const GearPair& gear, const MeshSchedule& mesh,
+                                 double time_step, std::int64_t n, const BearingsModel::State& y);
+// The error a bearings realization's non-finite state throws.
+DivergenceError bearings_divergence(std::uint64_t realization, int lane, double delta_m, double time);
+// The same for lane i of an ensemble of the bearings model (Ensemble::model_state()).
+BearingsOutputs bearings_outputs(const Ensemble& ensemble, int lane);
+
+// One realization of the bearings model, as Realization is one of the torsional model (the
+// interface of RealizationBase): the same mesh plan, the same random stream NormalStream(seed,
+// realization) and load increments, so that Phi's path is the torsional run's, bit for bit; and the
+// same stepping as Ensemble's bearings lanes, so its path is theirs, bit for bit.
+class BearingsRealization : public RealizationBase {
  public:
   using State = BearingsModel::State;
-  static constexpr int kNormalChunk = Ensemble::kNormalChunk;
 
   BearingsRealization(const GearPair& gear, double time_step, const InitialState& initial, const LaneSpec& lane,
                       std::uint64_t seed);
@@ -103,38 +119,23 @@ class BearingsRealization {
   void step();
   void reset();
 
-  std::int64_t step_index() const { return n_; }
-  double time() const { return static_cast<double>(n_) * h_; }
-  double time_step() const { return h_; }
-  const GearPair& gear() const { return gear_; }
   const BearingsModel& model() const { return model_; }
-  const MeshSchedule& mesh() const { return mesh_; }
   const State& state() const { return y_; }
   void set_state(const State& y) { y_ = y; }
-  double load() const { return load_; }
   // Crossings of delta_m through +-b (+ e) located so far.
   std::int64_t crossings() const { return crossings_; }
-  BearingsOutputs outputs() const;
+  BearingsOutputs outputs() const { return bearings_outputs(model_, gear_, mesh_, h_, n_, y_); }
 
-  // The located segments of grid step n from state y with loads load0 -> load1 (the one stepping path;
-  // public for the tests of the seam).
-  int advance(std::int64_t n, double load0, double load1, State& y) const;
+  // The located segments of grid step n from state y with loads load0 -> load1 (bearings_step; public
+  // for the tests of the seam).
+  int advance(std::int64_t n, double load0, double load1, State& y) const {
+    return bearings_step(model_, gear_, mesh_, h_, spec_.mu, n, load0, load1, y);
+  }
 
  private:
-  void refill_normals(std::uint64_t first_index);
-
-  GearPair gear_;
   BearingsModel model_;
-  MeshSchedule mesh_;
-  double h_, sqrt_h_;
-  InitialState initial_;
-  LaneSpec spec_;
-  NormalStream stream_;
-  std::int64_t n_ = 0, crossings_ = 0;
+  std::int64_t crossings_ = 0;
   State y_ = State::Zero();
-  double load_ = 0.0;
-  double normals_[kNormalChunk] = {};
-  std::uint64_t normals_first_ = 0;
 };
 
 }  // namespace gear_dynamics

@@ -1,5 +1,8 @@
 // The gear SDE (doc/model.md §2) for a block of realizations stepped together: structure of arrays,
 // one SIMD lane per realization, RK4 with the stiffness switches split out (doc/model.md §5).
+// gear_pair.model = bearings runs here too, one lane after the other through the model seam
+// (bearings_step, engine/bearings.hpp), its delta and delta_dot the mesh deflection delta_m and its
+// rate: the observers, the recorder and the batch see it as they see the torsional model.
 // The CLI and the Monte Carlo batch run this class; the live node steps its one realization with
 // Realization (engine/realization.hpp), the same kernel (engine/rk4_kernel.hpp) on one lane. Every
 // lane's arithmetic is independent of the other lanes (the build uses -ffp-contract=off), so a
@@ -73,7 +76,7 @@ class Ensemble {
   const MeshSchedule& mesh() const { return mesh_; }
   const LaneSpec& lane(int i) const { return spec_[i]; }
 
-  // State of the real lanes (padding excluded).
+  // State of the real lanes (padding excluded); for the bearings model delta_m and its rate.
   auto delta() const { return delta_.head(lanes()); }
   auto velocity() const { return velocity_.head(lanes()); }
   auto load() const { return load_.head(lanes()); }
@@ -81,6 +84,9 @@ class Ensemble {
   int padded_lanes() const { return static_cast<int>(delta_.size()); }
   const Eigen::ArrayXd& padded_delta() const { return delta_; }
   const Eigen::ArrayXd& padded_velocity() const { return velocity_; }
+  // The whole state of each lane of a model with more than (delta, delta_dot), one column per lane
+  // (BearingsModel::State; bearings_outputs(ensemble, lane) reads it); empty for the torsional model.
+  const Eigen::ArrayXXd& model_state() const { return model_state_; }
 
   // Run-time changes; they take effect at the next step boundary.
   void set_mu(int lane, double mu);
@@ -89,12 +95,15 @@ class Ensemble {
   // Sets the lane's load state Phi [m/s^2] now; the load SDE goes on from it (an external load).
   void set_load(int lane, double load);
   // Overwrites one lane's (delta, delta_dot) at the current step; the load and the random stream
-  // are left alone (the two-trajectory Lyapunov method, doc/nonlinear-dynamics.md §4).
+  // are left alone (the two-trajectory Lyapunov method, doc/nonlinear-dynamics.md §4). Torsional
+  // model only (the bearings model's state is not (delta, delta_dot)).
   void set_state(int lane, double delta, double velocity);
 
  private:
   void refill_normals(std::uint64_t first_index);
   void report_divergence() const;
+  // The bearings model's step of every lane, with normal column `column` (src/engine/ensemble.cpp).
+  void step_bearings(Eigen::Index column);
 
   GearPair gear_;
   MeshSchedule mesh_;
@@ -111,6 +120,7 @@ class Ensemble {
 
   // Padded to a multiple of kPacket.
   Eigen::ArrayXd delta_, velocity_, load_, mu_, sigma_, drift_;
+  Eigen::ArrayXXd model_state_;  // model_state()
   // Padded lanes x kNormalChunk: column j holds normal normals_first_ + j of each lane's stream.
   static_assert(Ensemble::kPacket == NormalLanes::kLanes);
   // Chunks start at multiples of kNormalChunk, whole blocks of the stream's generator.

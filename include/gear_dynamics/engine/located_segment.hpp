@@ -163,6 +163,81 @@ inline double first_negative_root(double e0, double e1, double e2, double e3) {
 
 }  // namespace located
 
+namespace located {
+
+// The crossing search of every model's located segment (this file's torsional one, model_step.hpp's
+// generic one): one implementation, so that both models locate their impacts the same way.
+// `step(s, u0, w, y)` takes y by one RK4 step on branch s over the fraction w of the rest of the
+// segment from u0 (w = 1: to its end); `deflection` and `rate` read the mesh deflection and its time
+// derivative off a state; ea, eb are e at the segment's start and end. `project(y, level)` puts a
+// state on a boundary it was located on (the torsional state, whose deflection is a coordinate), or
+// is nullptr: the state stays the model's, and a restart up to 1e-15 b beyond the boundary counts
+// as on it. Returns the crossings located.
+template <class State, class Step, class Deflection, class Rate, class Project>
+GD_LOCATED_INLINE int locate_crossings(double H, double b, double ea, double eb, State& y, const Step& step,
+                                       const Deflection& deflection, const Rate& rate, const Project& project) {
+  constexpr bool kProjects = !std::is_null_pointer_v<Project>;
+  const auto line = [](double u, double a, double c) { return u == 0.0 ? a : u == 1.0 ? c : std::fma(u, c - a, a); };
+  int s = branch_of(deflection(y) - ea, b);
+  double u0 = 0.0;  // fraction of the segment done
+  for (int crossings = 0;; ++crossings) {
+    const double rest = 1.0 - u0, Hr = rest * H;
+    State y1 = y;
+    step(s, u0, 1.0, y1);
+    if (crossings == kMaxCrossingsPerSegment) {
+      y = y1;
+      return crossings;
+    }
+    // The first boundary the dense output reaches: p(w) = d + m0 w + c2 w^2 + c3 w^3 against the
+    // boundary level + e(w), e a straight line (slope de over the rest of the segment).
+    const double d = deflection(y), d1 = deflection(y1);
+    const double m0 = Hr * rate(y), m1 = Hr * rate(y1);
+    const double c2 = 3.0 * (d1 - d) - 2.0 * m0 - m1, c3 = 2.0 * (d - d1) + m0 + m1;
+    const double e0 = line(u0, ea, eb), de = rest * (eb - ea);
+    Boundary bnd[2];
+    const int nb = boundaries(s, b, bnd);
+    double w = -1.0;
+    int hit = -1;
+    for (int k = 0; k < nb; ++k) {
+      const double sd = bnd[k].side;
+      const double gap = sd * (d - (bnd[k].level + e0));
+      const double wk = first_negative_root(kProjects ? gap : std::fmax(0.0, gap), sd * (m0 - de), sd * c2, sd * c3);
+      if (wk > 0.0 && (w < 0.0 || wk < w)) w = wk, hit = k;
+    }
+    if (hit < 0) {
+      y = y1;
+      return crossings;
+    }
+    // Newton on the step length: side * (delta(w) - L - e(w)) = 0, whose slope in w is
+    // Hr delta_dot(w) - de.
+    const Boundary& B = bnd[hit];
+    State yw = y;
+    double dw = d, level = B.level + e0;
+    for (int it = 0; it < 8; ++it) {
+      yw = y;
+      step(s, u0, w, yw);
+      level = B.level + std::fma(w, de, e0);
+      dw = deflection(yw);
+      const double f = dw - level, slope = Hr * rate(yw) - de;
+      if (std::fabs(f) <= 1e-15 * b || slope == 0.0) break;
+      const double next = std::fmin(1.0, std::fmax(0.0, w - f / slope));
+      if (next == w) break;
+      w = next;
+    }
+    if (w >= 1.0 && B.side * (dw - level) >= 0.0) {  // the step itself stays on the branch
+      y = yw;
+      return crossings;
+    }
+    y = yw;  // on the boundary within the Newton tolerance (1e-15 b)
+    if constexpr (kProjects) project(y, level);
+    s = B.beyond;
+    u0 = w >= 1.0 ? 1.0 : u0 + w * rest;
+    if (u0 >= 1.0) return crossings + 1;
+  }
+}
+
+}  // namespace located
+
 // Integrates the segment from (d, v) with every crossing of |delta| = b located: a branch RK4 step to
 // the segment's end; if its cubic Hermite dense output (the step's end values and slopes) leaves
 // the branch, the crossing is refined by Newton on the RK4 step's own length (to 1e-15 of b), the
@@ -170,75 +245,31 @@ inline double first_negative_root(double e0, double e1, double e2, double e3) {
 template <class T = NoTangent>
 inline void located_segment(const SegmentInputs& in, double& d, double& v, T& tangent) {
   using namespace located;
+  struct State {
+    double d, v;
+    T tangent;
+  };
   // K, Q, the load and e at the fraction u of the segment: straight lines between its end values.
   const auto line = [](double u, double a, double b) { return u == 0.0 ? a : u == 1.0 ? b : std::fma(u, b - a, a); };
   const double e_dot = (in.eb - in.ea) / in.H;
-  int s = branch_of(d - in.ea, in.b);
-  double u0 = 0.0;  // fraction of the segment done
-  for (int crossings = 0;; ++crossings) {
+  // The branch step over [u0, u0 + w rest]; the whole segment uses its own midpoint K and Q.
+  const auto step = [&](int s, double u0, double w, State& y) {
     const double rest = 1.0 - u0, Hr = rest * in.H;
-    // The branch step over [u0, u0 + w rest]; the whole segment uses its own midpoint K and Q.
-    const auto step = [&](double w, double& dd, double& vv, T& tt) {
-      const double u1 = w == 1.0 ? 1.0 : u0 + w * rest;
-      const bool whole = u0 == 0.0 && u1 == 1.0;
-      const double um = 0.5 * (u0 + u1);
-      const BranchInputs bi{line(u0, in.Ka, in.Kb), whole ? in.Km : line(um, in.Ka, in.Kb), line(u1, in.Ka, in.Kb),
-                            line(u0, in.qa, in.qb), whole ? in.qm : line(um, in.qa, in.qb), line(u1, in.qa, in.qb),
-                            line(u0, in.la, in.lb), line(u1, in.la, in.lb),
-                            line(u0, in.ea, in.eb), line(u1, in.ea, in.eb), e_dot};
-      branch_rk4(s, w == 1.0 ? Hr : w * Hr, bi, in.b, in.alpha, dd, vv, tt);
-    };
-    double d1 = d, v1 = v;
-    T t1 = tangent;
-    step(1.0, d1, v1, t1);
-    if (crossings == kMaxCrossingsPerSegment) {
-      d = d1, v = v1, tangent = t1;
-      return;
-    }
-    // The first boundary the dense output reaches: p(w) = d + m0 w + c2 w^2 + c3 w^3 against the
-    // boundary level + e(w), e a straight line (slope de over the rest of the segment).
-    const double m0 = Hr * v, m1 = Hr * v1;
-    const double c2 = 3.0 * (d1 - d) - 2.0 * m0 - m1, c3 = 2.0 * (d - d1) + m0 + m1;
-    const double e0 = line(u0, in.ea, in.eb), de = rest * (in.eb - in.ea);
-    Boundary bnd[2];
-    const int nb = boundaries(s, in.b, bnd);
-    double w = -1.0;
-    int hit = -1;
-    for (int k = 0; k < nb; ++k) {
-      const double sd = bnd[k].side;
-      const double wk = first_negative_root(sd * (d - (bnd[k].level + e0)), sd * (m0 - de), sd * c2, sd * c3);
-      if (wk > 0.0 && (w < 0.0 || wk < w)) w = wk, hit = k;
-    }
-    if (hit < 0) {
-      d = d1, v = v1, tangent = t1;
-      return;
-    }
-    // Newton on the step length: side * (delta(w) - L - e(w)) = 0, whose slope in w is
-    // Hr delta_dot(w) - de.
-    const Boundary& B = bnd[hit];
-    double dw = d, vw = v, level = B.level + e0;
-    T tw = tangent;
-    for (int it = 0; it < 8; ++it) {
-      dw = d, vw = v, tw = tangent;
-      step(w, dw, vw, tw);
-      level = B.level + std::fma(w, de, e0);
-      const double f = dw - level, slope = Hr * vw - de;
-      if (std::fabs(f) <= 1e-15 * in.b || slope == 0.0) break;
-      const double next = std::fmin(1.0, std::fmax(0.0, w - f / slope));
-      if (next == w) break;
-      w = next;
-    }
-    if (w >= 1.0 && B.side * (dw - level) >= 0.0) {  // the step itself stays on the branch
-      d = dw, v = vw, tangent = tw;
-      return;
-    }
-    d = level;  // on the boundary (within the Newton tolerance): the new branch starts with g = 0
-    v = vw;
-    tangent = tw;
-    s = B.beyond;
-    u0 = w >= 1.0 ? 1.0 : u0 + w * rest;
-    if (u0 >= 1.0) return;
-  }
+    const double u1 = w == 1.0 ? 1.0 : u0 + w * rest;
+    const bool whole = u0 == 0.0 && u1 == 1.0;
+    const double um = 0.5 * (u0 + u1);
+    const BranchInputs bi{line(u0, in.Ka, in.Kb), whole ? in.Km : line(um, in.Ka, in.Kb), line(u1, in.Ka, in.Kb),
+                          line(u0, in.qa, in.qb), whole ? in.qm : line(um, in.qa, in.qb), line(u1, in.qa, in.qb),
+                          line(u0, in.la, in.lb), line(u1, in.la, in.lb),
+                          line(u0, in.ea, in.eb), line(u1, in.ea, in.eb), e_dot};
+    branch_rk4(s, w == 1.0 ? Hr : w * Hr, bi, in.b, in.alpha, y.d, y.v, y.tangent);
+  };
+  State y{d, v, tangent};
+  // On the boundary the new branch starts with g = 0 exactly.
+  locate_crossings(
+      in.H, in.b, in.ea, in.eb, y, step, [](const State& x) { return x.d; }, [](const State& x) { return x.v; },
+      [](State& x, double level) { x.d = level; });
+  d = y.d, v = y.v, tangent = y.tangent;
 }
 
 }  // namespace gear_dynamics::kernel

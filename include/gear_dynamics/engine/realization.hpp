@@ -15,17 +15,13 @@
 
 namespace gear_dynamics {
 
-class Realization {
+// What every one-realization path shares, whatever the model: the mesh plan, the time grid, the
+// lane's settings and its random stream, and the load Phi that the stream drives. Realization
+// (torsional) and BearingsRealization (engine/bearings.hpp) derive from it and add their state and
+// their step; the load path is the same in both, bit for bit (Ensemble's too).
+class RealizationBase {
  public:
   static constexpr int kNormalChunk = Ensemble::kNormalChunk;  // normals drawn per refill
-
-  Realization(const GearPair& gear, double time_step, const InitialState& initial, const LaneSpec& lane,
-              std::uint64_t seed);
-
-  // Advances by one grid step. Throws DivergenceError (lane 0) on a non-finite state.
-  void step();
-  // Back to t = 0 and the start of the random stream: the run repeats bit for bit.
-  void reset();
 
   std::int64_t step_index() const { return n_; }
   double time() const { return static_cast<double>(n_) * h_; }
@@ -34,9 +30,6 @@ class Realization {
   const GearPair& gear() const { return gear_; }
   const MeshSchedule& mesh() const { return mesh_; }
   const LaneSpec& lane() const { return spec_; }
-
-  double delta() const { return delta_; }
-  double velocity() const { return velocity_; }
   double load() const { return load_; }
 
   // Run-time changes, as Ensemble's; they take effect at the next step.
@@ -44,27 +37,56 @@ class Realization {
   void set_sigma(double sigma);
   void set_drift(double drift) { spec_.drift = drift; }
   void set_load(double load) { load_ = load; }
-  void set_state(double delta, double velocity) {
-    delta_ = delta;
-    velocity_ = velocity;
-  }
 
- private:
-  void refill_normals(std::uint64_t first_index);
-  [[noreturn]] void report_divergence() const;
+ protected:
+  RealizationBase(const GearPair& gear, double time_step, const InitialState& initial, const LaneSpec& lane,
+                  std::uint64_t seed);
+  // Back to t = 0 and the start of the random stream; Phi(0) from normal 0.
+  void restart();
+  // The normal that drives the next step (normal n + 1 of the stream).
+  double next_normal();
+  // Phi at the end of the next step from that normal: the load SDE's step (kernel::load_next).
+  double next_load(double z) const;
 
   GearPair gear_;
   MeshSchedule mesh_;
   double h_, sqrt_h_;
   InitialState initial_;
   LaneSpec spec_;
-  NormalStream stream_;
   std::uint64_t seed_;
   std::int64_t n_ = 0;
-  double delta_ = 0.0, velocity_ = 0.0, load_ = 0.0;
+  double load_ = 0.0;
+
+ private:
+  void refill_normals(std::uint64_t first_index);
+  NormalStream stream_;
   // normals_[j] is normal normals_first_ + j of the stream (zeros without a stream).
   double normals_[kNormalChunk] = {};
   std::uint64_t normals_first_ = 0;
+};
+
+class Realization : public RealizationBase {
+ public:
+  Realization(const GearPair& gear, double time_step, const InitialState& initial, const LaneSpec& lane,
+              std::uint64_t seed);
+
+  // Advances by one grid step. Throws DivergenceError (lane 0) on a non-finite state.
+  void step();
+  // Back to t = 0 and the start of the random stream: the run repeats bit for bit.
+  void reset();
+
+  double delta() const { return delta_; }
+  double velocity() const { return velocity_; }
+
+  void set_state(double delta, double velocity) {
+    delta_ = delta;
+    velocity_ = velocity;
+  }
+
+ private:
+  [[noreturn]] void report_divergence() const;
+
+  double delta_ = 0.0, velocity_ = 0.0;
 };
 
 }  // namespace gear_dynamics

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <vector>
 
 #include "gear_dynamics/engine/ensemble.hpp"
@@ -27,6 +28,17 @@ struct SnapshotState {
   double time, delta, delta_dot, load;  // [s], [m], [m/s], [m/s^2]
 };
 
+// The mean and the root mean square of a force over the analysis window [T - W, T] [N].
+struct ForceStatistics {
+  double mean = 0.0, rms = 0.0;
+};
+
+// The bearings model's forces over the window (doc/model.md §11's outputs): the mesh force and what
+// each body puts on its bearing across the line of action (x) and along it (y).
+struct BearingForces {
+  ForceStatistics mesh_force, pinion_fx, pinion_fy, wheel_fx, wheel_fy;
+};
+
 // What a run leaves behind (SI).
 struct RunResult {
   double center_distance = 0.0;         // d over [T - W, T] [m s^-1/2]
@@ -38,6 +50,7 @@ struct RunResult {
   double final_delta = 0.0, final_delta_dot = 0.0, final_load = 0.0;
   std::vector<SnapshotState> snapshots;
   std::vector<SectionPoint> section;  // the Poincare section, if asked for (SectionTimes)
+  std::optional<BearingForces> bearings;  // gear_pair.model = bearings only
 };
 
 // A Poincare section taken while the run is stepped (PoincareSampler, doc/nonlinear-dynamics.md

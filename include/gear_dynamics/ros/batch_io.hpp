@@ -110,11 +110,17 @@ class BagSink : public BatchSink {
   struct Close {
     std::vector<PoincarePoint> section;  // written before the summary
     RunSummary summary;
+    std::optional<BearingSummary> bearings;  // the bearings model's, written after the summary
+  };
+  // The bearings model's outputs at a recorded state.
+  struct BearingsSample {
+    MeshState mesh;
+    geometry_msgs::WrenchStamped pinion, wheel;
   };
   struct Abandon {};
   struct Item {
     std::size_t id;  // RunSpec::id
-    std::variant<Open, GearState, Close, Abandon> what;
+    std::variant<Open, GearState, BearingsSample, Close, Abandon> what;
   };
 
   void push(std::vector<Item>&& items);

@@ -8,12 +8,17 @@
 
 #include <string>
 
+#include <geometry_msgs/WrenchStamped.h>
+
+#include "gear_dynamics/BearingSummary.h"
 #include "gear_dynamics/GearState.h"
+#include "gear_dynamics/MeshState.h"
 #include "gear_dynamics/PoincarePoint.h"
 #include "gear_dynamics/RunInfo.h"
 #include "gear_dynamics/RunSummary.h"
 #include "gear_dynamics/batch/run_kind.hpp"
 #include "gear_dynamics/config/config.hpp"
+#include "gear_dynamics/engine/bearings.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
 #include "gear_dynamics/engine/simulation.hpp"
 #include "gear_dynamics/live/live_simulation.hpp"
@@ -31,6 +36,8 @@ YAML::Node yaml_from_parameters(const ros::NodeHandle& nh, const std::vector<std
 // Every parameter of `nh`'s namespace as one YAML map (empty if it holds none).
 YAML::Node yaml_from_namespace(const ros::NodeHandle& nh);
 ModelConfig load_model_config(const ros::NodeHandle& nh);
+// Throws ConfigError if the live node cannot run c's model.
+void require_live_model(const ModelConfig& c);
 
 // The topics of a run bag (doc/batch-folder.md §2, §5); the manifest is batch/manifest.hpp's.
 constexpr const char* kRunInfoTopic = "/gear/run_info";
@@ -38,6 +45,15 @@ constexpr const char* kStateTopic = "/gear/state";
 constexpr const char* kSummaryTopic = "/gear/summary";
 // The Poincare section of a deterministic run (S1, phase): one PoincarePoint per mesh period.
 constexpr const char* kPoincareTopic = "/gear/poincare";
+// gear_pair.model = bearings adds, at each recorded state, the mesh and the force each body puts on
+// its bearing (a wrench in the bearing's frame of urdf/gear_pair.urdf), and the window's statistics
+// of those forces at the end.
+constexpr const char* kMeshTopic = "/gear/mesh";
+constexpr const char* kPinionBearingTopic = "/gear/pinion_bearing/wrench";
+constexpr const char* kWheelBearingTopic = "/gear/wheel_bearing/wrench";
+constexpr const char* kBearingSummaryTopic = "/gear/bearing_summary";
+constexpr const char* kPinionBearingFrame = "pinion_bearing";
+constexpr const char* kWheelBearingFrame = "wheel_bearing";
 
 RunInfo make_run_info(const ModelConfig& config, RunKind kind, std::uint32_t realization,
                       double mu, double sigma, double duration);
@@ -53,5 +69,12 @@ PoincarePoint make_poincare_point(const SectionPoint& point);
 RunSummary make_summary(const std::string& run_name, RunKind kind,
                         std::uint32_t realization, double mu, double mesh_phase,
                         const RunSettings& run, const RunResult& result);
+
+// The bearings model's outputs at time t as messages: the mesh, and the force a body puts on its
+// bearing as a wrench (force only) in `frame`.
+MeshState make_mesh_state(double t, const BearingsOutputs& outputs, double delta_t);
+geometry_msgs::WrenchStamped make_bearing_wrench(double t, const char* frame, double fx, double fy);
+// The window's statistics of a bearings run (RunResult::bearings).
+BearingSummary make_bearing_summary(const std::string& run_name, const RunSettings& run, const BearingForces& forces);
 
 }  // namespace gear_dynamics
