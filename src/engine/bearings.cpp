@@ -144,7 +144,8 @@ void BearingsRealization::step() {
 BearingsOutputs BearingsRealization::outputs() const {
   const double t = time();
   const double e = mesh_.transmission_error(t);
-  const double e_dot = (mesh_.transmission_error(t + h_) - e) / h_;
+  // The rate the stepping integrates e with (the table's slope), so F_m is the force of the derivative.
+  const double e_dot = mesh_.transmission_error_rate(t);
   const double dm = model_.deflection(y_);
   model_step::MeshPoint p{mesh_.stiffness(t), 0.0, 0.0, 0.0, e, e_dot};
   const BearingParameters& b = model_.bearings();
