@@ -2,6 +2,8 @@
 // compiled once per instruction set beside the torsional kernel.
 #include "gear_dynamics/engine/bearings.hpp"
 
+#include "gear_dynamics/model/friction_law.hpp"
+
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
@@ -9,6 +11,7 @@
 #include <stdexcept>
 
 #include "gear_dynamics/engine/rk4_kernel.hpp"
+#include "gear_dynamics/model/friction_law.hpp"
 #include "gear_dynamics/model/mesh_table.hpp"
 
 namespace gear_dynamics {
@@ -55,6 +58,16 @@ BearingsModel::BearingsModel(const GearPair& gear)
       inv_mg_(1.0 / p_.wheel_mass) {}
 
 double friction_share(const GearPair& gear, const MeshTable* table, double a) {
+  if (gear.in.friction_model != FrictionModel::kConstant) {
+    // A law: each pair by its share and its own mu (a law's mesh always has a table).
+    const double P = table->period();
+    const std::vector<MeshContact> contacts = table->contacts(a - std::floor(a / P) * P);
+    double total = 0.0;
+    for (const MeshContact& c : contacts) total += c.stiffness;
+    double share = 0.0;
+    for (const MeshContact& c : contacts) share += pair_friction_weight(gear, c.x, c.x, c.stiffness / total);
+    return share;
+  }
   if (gear.in.friction_direction == FrictionDirection::kConstant) return 1.0;
   const auto sign = [&](double x) { return x >= gear.x_p ? 1.0 : -1.0; };
   if (table && gear.in.mesh_stiffness == MeshStiffnessModel::kPotentialEnergy) {
