@@ -34,7 +34,11 @@ BearingParameters bearing_parameters(const GearPair& gear) {
 
 double bearings_max_frequency(const GearPair& gear, double stiffness, double mu) {
   const BearingParameters p = bearing_parameters(gear);
-  const double f_max = std::max(std::fabs(gear.friction_factor(0.0)), std::fabs(gear.friction_factor(gear.mesh_period_angle)));
+  // A law's f carries mu_j / mu_ref, which may exceed 1: take its table's largest then.
+  const double f_max = gear.in.friction_model != FrictionModel::kConstant
+                           ? std::fabs(shared_mesh_table(gear)->max_friction())
+                           : std::max(std::fabs(gear.friction_factor(0.0)),
+                                      std::fabs(gear.friction_factor(gear.mesh_period_angle)));
   // (delta_t, y_p, y_g): V = 1/2 K (delta_t + y_p - y_g)^2 + 1/2 k_b (y_p^2 + y_g^2); x's modes are
   // sqrt(k_b / m), below the y ones.
   Eigen::Matrix3d M = Eigen::Matrix3d::Zero(), K;
