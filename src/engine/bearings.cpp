@@ -2,6 +2,8 @@
 // compiled once per instruction set beside the torsional kernel.
 #include "gear_dynamics/engine/bearings.hpp"
 
+#include "gear_dynamics/model/friction_law.hpp"
+
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
@@ -9,6 +11,7 @@
 #include <stdexcept>
 
 #include "gear_dynamics/engine/rk4_kernel.hpp"
+#include "gear_dynamics/model/friction_law.hpp"
 #include "gear_dynamics/model/mesh_table.hpp"
 
 namespace gear_dynamics {
@@ -31,7 +34,11 @@ BearingParameters bearing_parameters(const GearPair& gear) {
 
 double bearings_max_frequency(const GearPair& gear, double stiffness, double mu) {
   const BearingParameters p = bearing_parameters(gear);
-  const double f_max = std::max(std::fabs(gear.friction_factor(0.0)), std::fabs(gear.friction_factor(gear.mesh_period_angle)));
+  // A law's f carries mu_j / mu_ref, which may exceed 1: take its table's largest then.
+  const double f_max = gear.in.friction_model != FrictionModel::kConstant
+                           ? std::fabs(shared_mesh_table(gear)->max_friction())
+                           : std::max(std::fabs(gear.friction_factor(0.0)),
+                                      std::fabs(gear.friction_factor(gear.mesh_period_angle)));
   // (delta_t, y_p, y_g): V = 1/2 K (delta_t + y_p - y_g)^2 + 1/2 k_b (y_p^2 + y_g^2); x's modes are
   // sqrt(k_b / m), below the y ones.
   Eigen::Matrix3d M = Eigen::Matrix3d::Zero(), K;
@@ -55,6 +62,16 @@ BearingsModel::BearingsModel(const GearPair& gear)
       inv_mg_(1.0 / p_.wheel_mass) {}
 
 double friction_share(const GearPair& gear, const MeshTable* table, double a) {
+  if (gear.in.friction_model != FrictionModel::kConstant) {
+    // A law: each pair by its share and its own mu (a law's mesh always has a table).
+    const double P = table->period();
+    const std::vector<MeshContact> contacts = table->contacts(a - std::floor(a / P) * P);
+    double total = 0.0;
+    for (const MeshContact& c : contacts) total += c.stiffness;
+    double share = 0.0;
+    for (const MeshContact& c : contacts) share += pair_friction_weight(gear, c.x, c.x, c.stiffness / total);
+    return share;
+  }
   if (gear.in.friction_direction == FrictionDirection::kConstant) return 1.0;
   const auto sign = [&](double x) { return x >= gear.x_p ? 1.0 : -1.0; };
   if (table && gear.in.mesh_stiffness == MeshStiffnessModel::kPotentialEnergy) {
@@ -106,7 +123,8 @@ BearingsOutputs bearings_outputs(const BearingsModel& model, const GearPair& gea
                                  double h, std::int64_t n, const BearingsModel::State& y) {
   const double t = static_cast<double>(n) * h;
   const double e = mesh.transmission_error(t);
-  const double e_dot = (mesh.transmission_error(t + h) - e) / h;
+  // The rate the stepping integrates e with (the table's slope), so F_m is the force of the derivative.
+  const double e_dot = mesh.transmission_error_rate(t);
   const double dm = model.deflection(y);
   model_step::MeshPoint p{mesh.stiffness(t), 0.0, 0.0, 0.0, e, e_dot};
   const BearingParameters& b = model.bearings();

@@ -1,5 +1,7 @@
 #include "gear_dynamics/model/mesh_table.hpp"
 
+#include "gear_dynamics/model/friction_law.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -28,7 +30,8 @@ bool faults_gear(const GearInputs& in, FaultyGear gear) {
 
 bool is_paper_mesh(const GearInputs& in) {
   return in.mesh_stiffness == MeshStiffnessModel::kSquareWave &&
-         in.friction_direction == FrictionDirection::kConstant && !faults_gear(in, FaultyGear::kPinion) &&
+         in.friction_direction == FrictionDirection::kConstant && in.friction_model == FrictionModel::kConstant &&
+         !faults_gear(in, FaultyGear::kPinion) &&
          !faults_gear(in, FaultyGear::kWheel) && !has_errors(in.profile_errors.pinion) &&
          !has_errors(in.profile_errors.wheel);
 }
@@ -86,7 +89,9 @@ std::vector<double> MeshTable::period_breaks(long m) const {
     const double phi = phi_m + (x - g.x_a) / rb1;
     if (phi > phi_m && phi < phi_n) b.push_back(phi);
   };
-  if (g.in.friction_direction == FrictionDirection::kReversing) add_ref(g.x_p), add_next(g.x_p);
+  // The pitch point: friction reverses there, and a law has its kink (sliding through 0) there.
+  if (g.in.friction_direction == FrictionDirection::kReversing || g.in.friction_model != FrictionModel::kConstant)
+    add_ref(g.x_p), add_next(g.x_p);
   if (teeth_) {
     for (double x : teeth_->discontinuities(static_cast<int>(positive_mod(m, g.in.pinion_teeth)),
                                             static_cast<int>(positive_mod(m, g.in.gear_teeth))))
@@ -99,6 +104,10 @@ std::vector<double> MeshTable::period_breaks(long m) const {
   b.erase(std::unique(b.begin(), b.end(), [&](double x, double y) { return y - x < 1e-12 * phi_n; }), b.end());
   b.back() = phi_n;
   return b;
+}
+
+double MeshTable::law_friction(double share, double x, double x_mid) const {
+  return pair_friction_weight(gear_, x, x_mid, share) * (gear_.c0 + gear_.c1 * x);
 }
 
 MeshTable::Sample MeshTable::evaluate(long m, double phi, double lo, double hi) const {
@@ -120,7 +129,12 @@ MeshTable::Sample MeshTable::evaluate(long m, double phi, double lo, double hi) 
   }
   const double K = s.ref + s.next;
   s.values.stiffness = K;
-  if (g.in.friction_direction == FrictionDirection::kConstant) {
+  if (g.in.friction_model != FrictionModel::kConstant) {
+    const double x_ref_mid = g.x_b + g.base_radius1 * mid;
+    const double x_next_mid = g.x_a + g.base_radius1 * (mid - g.single_pair_angle);
+    s.values.friction = (law_friction(s.ref / K, x_ref, x_ref_mid) +
+                         (two ? law_friction(s.next / K, x_next, x_next_mid) : 0.0));
+  } else if (g.in.friction_direction == FrictionDirection::kConstant) {
     s.values.friction = g.friction_factor(phi);  // the paper's reference pair (doc/model.md D4)
   } else {
     // Each pair's friction by its share of the force, its sign that of its sliding velocity (the
@@ -226,10 +240,12 @@ std::string table_key(const GearInputs& in) {
                    in.pressure_angle, in.face_width, in.addendum_coefficient, in.dedendum_coefficient,
                    in.profile_shift1, in.profile_shift2, in.bore_radius1, in.bore_radius2, in.crack.depth,
                    in.crack.angle, in.spall.length, in.spall.width, in.spall.position, in.density,
-                   in.damping_ratio, in.reference_load})
+                   in.damping_ratio, in.reference_load, in.friction_load, in.oil_viscosity,
+                   in.surface_roughness, in.pinion_speed})
     put(x);
   for (int x : {in.pinion_teeth, in.gear_teeth, static_cast<int>(in.mesh_stiffness),
-                static_cast<int>(in.friction_direction), static_cast<int>(in.crack.gear), in.crack.tooth,
+                static_cast<int>(in.friction_direction), static_cast<int>(in.friction_model),
+                static_cast<int>(in.crack.gear), in.crack.tooth,
                 static_cast<int>(in.spall.gear), in.spall.tooth})
     put(x);
   for (const auto* list : {&in.profile_errors.pinion, &in.profile_errors.wheel}) {

@@ -546,4 +546,41 @@ TEST(Bearings, WindowForcesAreTheStaticMeshLoad) {
   EXPECT_GE(f.wheel_fy.rms, std::fabs(f.wheel_fy.mean));
   std::printf("static m_e Phi = %.6g N; window mean F_m %.6g, wheel fy %.6g, pinion fy %.6g N; RMS F_m %.6g N\n",
               static_force, f.mesh_force.mean, f.wheel_fy.mean, f.pinion_fy.mean, f.mesh_force.rms);
+
+// The reported mesh force damps delta_m_dot - e_dot with the e_dot the stepping integrates (the slope
+// of the plan's straight-line e over the step's first segment), not a forward difference of e: on a
+// mesh with profile errors the forward difference jumps at every error step and misses the force the
+// derivative uses by alpha |g| (Delta e / h). Both sides are computed here from the model's force law.
+TEST(Bearings, ReportedMeshForceIsTheDerivativesForce) {
+  const gd::ModelConfig c = shipped();
+  gd::GearInputs in = bearings_inputs(c);
+  in.profile_errors.pinion = {2e-6, -1e-6, 3e-6};
+  const gd::GearPair g = gd::derive(in);
+  const double h = c.run.time_step;
+  gd::BearingsRealization r(g, h, c.initial, s1(2e4, 0.04), c.seed);
+  double worst = 0.0, forward_worst = 0.0;
+  int in_contact = 0;
+  for (int n = 0; n < 40000; ++n) {
+    r.step();
+    const gd::StepSegment seg = r.mesh().plan(r.step_index()).segment[0];
+    const double H = (seg.end - seg.begin) * h;
+    const double e = seg.error_start, dm = r.model().deflection(r.state());
+    const int branch = gd::model_step::branch_of(dm, e, g.in.backlash);
+    if (branch == 0) continue;
+    ++in_contact;
+    const double e_dot = (seg.error_end - seg.error_start) / H;
+    const double t = r.time();
+    const double forward = (r.mesh().transmission_error(t + h) - r.mesh().transmission_error(t)) / h;
+    gd::model_step::MeshPoint p{seg.stiffness_start, 0.0, 0.0, 0.0, e, e_dot};
+    const double F = r.model().mesh_force(branch, r.state(), p);
+    p.error_rate = forward;
+    const double F_forward = r.model().mesh_force(branch, r.state(), p);
+    const double reported = r.outputs().mesh_force;
+    worst = std::max(worst, std::fabs(reported - F) / std::fabs(F));
+    forward_worst = std::max(forward_worst, std::fabs(F_forward - F) / std::fabs(F));
+  }
+  ASSERT_GT(in_contact, 1000);
+  // The slopes agree to rounding (table slope times speed against a difference over H).
+  EXPECT_LT(worst, 1e-9);
+  EXPECT_GT(forward_worst, 1e-6) << "the check must tell a forward difference from the rate";
 }

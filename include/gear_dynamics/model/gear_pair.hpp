@@ -14,6 +14,9 @@ enum class MeshStiffnessModel { kSquareWave, kPotentialEnergy };
 // The sign of the friction force: the paper's, constant (D5), or reversed at the pitch point, where
 // the sliding velocity changes sign (doc/model.md §2).
 enum class FrictionDirection { kConstant, kReversing };
+// The law of the friction coefficient (model/friction_law.hpp, doc/model.md §2 "Friction laws"): the
+// lane's constant mu, or a law per tooth pair from its speeds, curvature and load.
+enum class FrictionModel { kConstant, kBenedictKelley, kXu, kIsoTr13989 };
 enum class FaultyGear { kNone, kPinion, kWheel };
 // Which model of the pair the engine steps (doc/model.md §11): the one-degree-of-freedom torsional
 // model, or the pair with the translations of both gears on their bearings.
@@ -68,6 +71,10 @@ struct GearInputs {
   double bore_radius2 = 0.030;         // wheel bore radius [m]
   MeshStiffnessModel mesh_stiffness = MeshStiffnessModel::kSquareWave;
   FrictionDirection friction_direction = FrictionDirection::kConstant;
+  FrictionModel friction_model = FrictionModel::kConstant;
+  double friction_load = 1000.0;        // W [N]: the static mesh force a friction law is evaluated at
+  double oil_viscosity = 0.023;         // eta [Pa s]: ISO VG 100 mineral oil at 70 C
+  double surface_roughness = 0.4e-6;    // Ra [m]: composite roughness of ground flanks
   RootCrack crack;
   Spall spall;
   ProfileErrors profile_errors;

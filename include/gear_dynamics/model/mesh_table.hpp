@@ -75,6 +75,9 @@ class MeshTable {
   };
   Sample evaluate(long m, double phi, double lo, double hi) const;
   double pair_stiffness(long pair, double x) const;
+  // A friction law's term of f for the pair at x with `share` of the force (x_mid: its side of the
+  // pitch point).
+  double law_friction(double share, double x, double x_mid) const;
   double pair_error(long pair) const;
   bool pair_is_faulty(long pair) const;
   std::vector<double> period_breaks(long m) const;  // local angles in [0, phi_n], increasing
