@@ -22,7 +22,9 @@
 #include "gear_dynamics/maths/spectrum.hpp"
 #include "gear_dynamics/model/gear_pair.hpp"
 #include "gear_dynamics/model/tooth_stiffness.hpp"
+#include "gear_dynamics/monitor/reference.hpp"
 #include "../../src/tools/cli.hpp"
+#include "module.hpp"
 
 namespace py = pybind11;
 namespace gd = gear_dynamics;
@@ -33,8 +35,10 @@ namespace {
 // run, then the exception is restored with the GIL held.
 struct PythonInterrupt {};
 
-YAML::Node model_root(const std::vector<std::string>& files, const std::vector<std::string>& sets,
-                      std::optional<double> mu, std::optional<long long> seed) {
+}  // namespace
+
+YAML::Node gd::python::model_root(const std::vector<std::string>& files, const std::vector<std::string>& sets,
+                                  std::optional<double> mu, std::optional<long long> seed) {
   gd::tools::ModelOptions o;
   o.files = files;
   o.sets = sets;
@@ -46,6 +50,10 @@ YAML::Node model_root(const std::vector<std::string>& files, const std::vector<s
     if (PyErr_WarnEx(PyExc_UserWarning, notice.c_str(), 1) < 0) throw py::error_already_set();
   return root;
 }
+
+namespace {
+
+using gd::python::model_root;
 
 std::string config_text(const std::vector<std::string>& files, const std::vector<std::string>& sets,
                         std::optional<double> mu, std::optional<long long> seed) {
@@ -126,6 +134,13 @@ py::dict simulate(const std::vector<std::string>& files, const std::vector<std::
   py::dict out;
   out["names"] = names;
   out["t"] = py::array_t<double>(ns, t.data());
+  {
+    const gd::GearPair gear = gd::derive(pc.gear);
+    py::array_t<double> angle(ns);
+    auto ma = angle.mutable_unchecked<1>();
+    for (py::ssize_t s = 0; s < ns; ++s) ma(s) = gd::shaft_angle(gear, t[static_cast<std::size_t>(s)]);
+    out["shaft_angle"] = angle;
+  }
   out["delta"] = per_run(delta);
   out["delta_dot"] = per_run(delta_dot);
   out["phi"] = per_run(phi);
@@ -295,4 +310,6 @@ PYBIND11_MODULE(_core, m) {
   m.def("tooth_pair_stiffness", &tooth_pair_stiffness, py::arg("files"), py::arg("sets"), py::arg("pinion_tooth"),
         py::arg("wheel_tooth"), py::arg("points"), py::arg("fillet_foundation"),
         "One tooth pair's potential-energy stiffness along the line of action.");
+  gd::python::bind_ensemble(m);
+  gd::python::bind_monitor(m);
 }
