@@ -23,7 +23,7 @@
 #include "gear_dynamics/model/gear_pair.hpp"
 #include "gear_dynamics/model/tooth_stiffness.hpp"
 #include "gear_dynamics/monitor/reference.hpp"
-#include "../../src/tools/cli.hpp"
+#include "gear_dynamics/config/model_files.hpp"
 #include "module.hpp"
 
 namespace py = pybind11;
@@ -39,14 +39,14 @@ struct PythonInterrupt {};
 
 YAML::Node gd::python::model_root(const std::vector<std::string>& files, const std::vector<std::string>& sets,
                                   std::optional<double> mu, std::optional<long long> seed) {
-  gd::tools::ModelOptions o;
+  gd::ModelOptions o;
   o.files = files;
   o.sets = sets;
   o.mu = mu;
-  YAML::Node root = gd::tools::model_yaml(o);
+  YAML::Node root = gd::model_yaml(o);
   if (seed) root["run"]["seed"] = *seed;
   // gear_run's notice of snapshot times after run.duration, as a Python warning.
-  if (const std::string notice = gd::tools::drop_late_snapshots(root); !notice.empty())
+  if (const std::string notice = gd::drop_late_snapshots(root); !notice.empty())
     if (PyErr_WarnEx(PyExc_UserWarning, notice.c_str(), 1) < 0) throw py::error_already_set();
   return root;
 }
@@ -295,7 +295,7 @@ PYBIND11_MODULE(_core, m) {
   py::register_exception<gd::ConfigError>(m, "ConfigError", PyExc_ValueError).doc() =
       "A configuration value or key the package refuses: the text names the parameter, the value and "
       "the allowed range, as gear_run prints it.";
-  m.def("config_dir", &gd::tools::config_dir, "The folder of the default configuration (gear_run's search).");
+  m.def("config_dir", &gd::config_dir, "The folder of the default configuration (gear_run's search).");
   m.def("config_text", &config_text, py::arg("files"), py::arg("sets"), py::arg("mu"), py::arg("seed"),
         "The validated configuration as YAML text.");
   m.def("simulate", &simulate, py::arg("files"), py::arg("sets"), py::arg("mu"), py::arg("seed"),
