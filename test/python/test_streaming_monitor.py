@@ -160,3 +160,31 @@ def test_read_reference_refuses_a_bad_file(tmp_path):
     bad.write_text("format: something_else\n")
     with pytest.raises(gear_dynamics.ReferenceError, match=str(bad)):
         gear_dynamics.read_reference(bad)
+
+
+def test_assess_against_a_reference_of_gear_monitor_reference(tmp_path):
+    import subprocess
+    from test_gear_dynamics import gear_run_path
+    tool = os.path.join(os.path.dirname(gear_run_path()), "gear_monitor_reference")
+    ref = tmp_path / "ref.yaml"
+    # 20 healthy windows: the smallest reference the tool accepts at a false-alarm rate of 0.25.
+    subprocess.run([tool, "--output", str(ref), "--realizations", "20", "--false-alarm", "0.25", "--samples", "256"],
+                   check=True, capture_output=True)
+    r = gear_dynamics.read_reference(ref)
+    assert r["indicators"] == [i["name"] for i in gear_dynamics.indicator_table()]
+    assert r["monitor"]["samples_per_revolution"] == 256 and len(r["bands"]) == 1
+    s = gear_dynamics.simulate(set={"run.duration": 0.2, "run.window": 0.05}, realizations=1, deterministic=False,
+                               rate=40000.0)
+    a = gear_dynamics.assess(s.delta[0], s.shaft_angle, ref, load=s.phi[0], set={"run.duration": 0.2})
+    # The assessed windows' indicators are indicators() of the same windows with the reference's
+    # settings and baseline (NA4*): the same tracker, so the same numbers.
+    teeth = gear_dynamics.config()["gear_pair"]["pinion_teeth"]
+    i = gear_dynamics.indicators(s.delta[0], s.shaft_angle, teeth=teeth, load=s.phi[0], samples_per_revolution=256,
+                                 baseline_residual_variance=r["bands"][0]["baseline_residual_variance"])
+    assert len(a["health"]) == len(i["rms"]) >= 2
+    for name in r["indicators"]:
+        assert np.array_equal(a[name], i[name], equal_nan=True), name
+    assert set(a["health"]) <= {"OK", "WARN", "ERROR"} and np.all(np.isfinite(a["t2"]))
+    # A reference made for another gear is refused, naming the key.
+    with pytest.raises(gear_dynamics.ReferenceError, match="backlash"):
+        gear_dynamics.assess(s.delta[0], s.shaft_angle, ref, set={"gear_pair.backlash": 3.3e-5})
