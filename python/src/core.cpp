@@ -22,7 +22,9 @@
 #include "gear_dynamics/maths/spectrum.hpp"
 #include "gear_dynamics/model/gear_pair.hpp"
 #include "gear_dynamics/model/tooth_stiffness.hpp"
-#include "../../src/tools/cli.hpp"
+#include "gear_dynamics/monitor/reference.hpp"
+#include "gear_dynamics/config/model_files.hpp"
+#include "module.hpp"
 
 namespace py = pybind11;
 namespace gd = gear_dynamics;
@@ -33,19 +35,25 @@ namespace {
 // run, then the exception is restored with the GIL held.
 struct PythonInterrupt {};
 
-YAML::Node model_root(const std::vector<std::string>& files, const std::vector<std::string>& sets,
-                      std::optional<double> mu, std::optional<long long> seed) {
-  gd::tools::ModelOptions o;
+}  // namespace
+
+YAML::Node gd::python::model_root(const std::vector<std::string>& files, const std::vector<std::string>& sets,
+                                  std::optional<double> mu, std::optional<long long> seed) {
+  gd::ModelOptions o;
   o.files = files;
   o.sets = sets;
   o.mu = mu;
-  YAML::Node root = gd::tools::model_yaml(o);
+  YAML::Node root = gd::model_yaml(o);
   if (seed) root["run"]["seed"] = *seed;
   // gear_run's notice of snapshot times after run.duration, as a Python warning.
-  if (const std::string notice = gd::tools::drop_late_snapshots(root); !notice.empty())
+  if (const std::string notice = gd::drop_late_snapshots(root); !notice.empty())
     if (PyErr_WarnEx(PyExc_UserWarning, notice.c_str(), 1) < 0) throw py::error_already_set();
   return root;
 }
+
+namespace {
+
+using gd::python::model_root;
 
 std::string config_text(const std::vector<std::string>& files, const std::vector<std::string>& sets,
                         std::optional<double> mu, std::optional<long long> seed) {
@@ -126,6 +134,13 @@ py::dict simulate(const std::vector<std::string>& files, const std::vector<std::
   py::dict out;
   out["names"] = names;
   out["t"] = py::array_t<double>(ns, t.data());
+  {
+    const gd::GearPair gear = gd::derive(pc.gear);
+    py::array_t<double> angle(ns);
+    auto ma = angle.mutable_unchecked<1>();
+    for (py::ssize_t s = 0; s < ns; ++s) ma(s) = gd::shaft_angle(gear, t[static_cast<std::size_t>(s)]);
+    out["shaft_angle"] = angle;
+  }
   out["delta"] = per_run(delta);
   out["delta_dot"] = per_run(delta_dot);
   out["phi"] = per_run(phi);
@@ -280,7 +295,7 @@ PYBIND11_MODULE(_core, m) {
   py::register_exception<gd::ConfigError>(m, "ConfigError", PyExc_ValueError).doc() =
       "A configuration value or key the package refuses: the text names the parameter, the value and "
       "the allowed range, as gear_run prints it.";
-  m.def("config_dir", &gd::tools::config_dir, "The folder of the default configuration (gear_run's search).");
+  m.def("config_dir", &gd::config_dir, "The folder of the default configuration (gear_run's search).");
   m.def("config_text", &config_text, py::arg("files"), py::arg("sets"), py::arg("mu"), py::arg("seed"),
         "The validated configuration as YAML text.");
   m.def("simulate", &simulate, py::arg("files"), py::arg("sets"), py::arg("mu"), py::arg("seed"),
@@ -295,4 +310,6 @@ PYBIND11_MODULE(_core, m) {
   m.def("tooth_pair_stiffness", &tooth_pair_stiffness, py::arg("files"), py::arg("sets"), py::arg("pinion_tooth"),
         py::arg("wheel_tooth"), py::arg("points"), py::arg("fillet_foundation"),
         "One tooth pair's potential-energy stiffness along the line of action.");
+  gd::python::bind_ensemble(m);
+  gd::python::bind_monitor(m);
 }
