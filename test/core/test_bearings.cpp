@@ -546,6 +546,7 @@ TEST(Bearings, WindowForcesAreTheStaticMeshLoad) {
   EXPECT_GE(f.wheel_fy.rms, std::fabs(f.wheel_fy.mean));
   std::printf("static m_e Phi = %.6g N; window mean F_m %.6g, wheel fy %.6g, pinion fy %.6g N; RMS F_m %.6g N\n",
               static_force, f.mesh_force.mean, f.wheel_fy.mean, f.pinion_fy.mean, f.mesh_force.rms);
+}
 
 // The reported mesh force damps delta_m_dot - e_dot with the e_dot the stepping integrates (the slope
 // of the plan's straight-line e over the step's first segment), not a forward difference of e: on a
