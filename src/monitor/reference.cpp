@@ -99,12 +99,10 @@ IndicatorSettings indicator_settings(const GearPair& gear, const MonitorSettings
   return s;
 }
 
-double monitored_value(const Ensemble& ensemble, int lane, MonitoredSignal signal) {
-  const double delta = ensemble.padded_delta()(lane);
+double monitored_signal(const GearPair& gear, const MeshSchedule& mesh, MonitoredSignal signal, double t,
+                        double stiffness, double delta, double delta_dot) {
   if (signal == MonitoredSignal::kDelta) return delta;
-  const double t = ensemble.time();
-  const double e = ensemble.mesh().transmission_error(t);
-  return mesh_force(ensemble.gear(), ensemble.mesh().stiffness(t), delta - e, ensemble.padded_velocity()(lane));
+  return mesh_force(gear, stiffness, delta, delta_dot, mesh.transmission_error(t), mesh.transmission_error_rate(t));
 }
 
 std::vector<std::vector<RevolutionWindow>> simulate_windows(const ModelConfig& config, const MonitorSettings& m,
@@ -135,15 +133,12 @@ std::vector<std::vector<RevolutionWindow>> simulate_windows(const ModelConfig& c
       const std::int64_t k = ensemble.step_index();
       if (k < first_recorded || k % m.decimation != 0) continue;
       const double t = ensemble.time(), angle = shaft_angle(gear, t);
-      // K and e are the block's, not a lane's: once per sample.
-      const bool force = m.signal == MonitoredSignal::kMeshForce;
-      const double k_t = force ? ensemble.mesh().stiffness(t) : 0.0;
-      const double e_t = force ? ensemble.mesh().transmission_error(t) : 0.0;
+      const double k_t = ensemble.mesh().stiffness(t);  // the block's, not a lane's
       for (int i = 0; i < lanes; ++i) {
         auto& mine = out[b0 + i];
         if (static_cast<int>(mine.size()) >= windows) continue;
-        const double delta = ensemble.padded_delta()(i);
-        const double value = force ? mesh_force(gear, k_t, delta - e_t, ensemble.padded_velocity()(i)) : delta;
+        const double value = monitored_signal(gear, ensemble.mesh(), m.signal, t, k_t, ensemble.padded_delta()(i),
+                                              ensemble.padded_velocity()(i));
         if (auto w = cut[i].add(angle, value, ensemble.load()(i))) mine.push_back(std::move(*w));
       }
     }

@@ -104,11 +104,8 @@ class GearMonitor {
     }
     last_t_ = s.t;
     if (s.t < warmup_) return;
-    double value = s.delta;
-    if (monitor_->settings().signal == gd::MonitoredSignal::kMeshForce) {
-      const double e = schedule_->transmission_error(s.t);
-      value = gd::mesh_force(gear_, s.mesh_stiffness, s.delta - e, s.delta_dot);
-    }
+    const double value = gd::monitored_signal(gear_, *schedule_, monitor_->settings().signal, s.t, s.mesh_stiffness,
+                                              s.delta, s.delta_dot);
     // The state's t is the grid time rounded to whole nanoseconds; the engine's angle is at n h.
     const double grid_t = std::round(s.t / time_step_) * time_step_;
     const auto window = windows_->add(gd::shaft_angle(gear_, grid_t), value, s.phi);

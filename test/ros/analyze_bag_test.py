@@ -3,7 +3,8 @@
 full speed, states at 1 kHz), then `gear_analyze spectrum --bag` of that bag against `gear_analyze
 spectrum` of the same run simulated (the live node steps S1 bit for bit as the engine does, so the
 PSDs must agree to rounding); poincare and safety read it too; a bag that lost a state, and one
-still being written, are refused with the reason."""
+still being written, are refused with the reason; the condition monitor of a recorded stochastic
+run against the same stream simulated."""
 import csv
 import glob
 import os
@@ -15,11 +16,14 @@ import tempfile
 import unittest
 
 import rosbag
+import rospkg
 import rospy
 import rostest
 from gear_dynamics.msg import GearState
 
 from simtest import Collector, ends_at, services, wait_until
+
+PKG = rospkg.RosPack().get_path('gear_dynamics')
 
 T_END = 1.0
 
@@ -39,16 +43,16 @@ class AnalyzeBag(unittest.TestCase):
         self.folder = tempfile.mkdtemp(prefix='gear_analyze_bag_')
         self.addCleanup(shutil.rmtree, self.folder)
 
-    def record(self):
+    def record(self, t_end=T_END, run=('deterministic:=true', 't_end:=%r' % T_END)):
         launch = subprocess.Popen(
             ['roslaunch', 'gear_dynamics', 'simulate.launch', 'record:=true', 'record_dir:=' + self.folder,
-             'deterministic:=true', 'paused:=true', 't_end:=%r' % T_END, 'real_time_factor:=0', 'output:=log'],
+             'paused:=true', 'real_time_factor:=0', 'output:=log'] + list(run),
             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
         try:
             state = Collector('/gear/state', GearState)
             state.wait_connected(30.0)
             services('/gear/gear_simulator')['unpause']()
-            state.wait_for(ends_at(T_END), 60.0, 't_end')
+            state.wait_for(ends_at(t_end), 60.0, 't_end')
             wait_until(lambda: glob.glob(os.path.join(self.folder, 'gear_*.bag')), 30.0, 'the closed bag')
         finally:
             os.killpg(launch.pid, signal.SIGINT)
@@ -102,6 +106,43 @@ class AnalyzeBag(unittest.TestCase):
         active = analyze('spectrum', '--bag', bag + '.active', '--output', a)
         self.assertEqual(active.returncode, 1)
         self.assertIn('rosbag reindex', active.stderr)
+
+    def test_monitor_of_a_bag(self):
+        """gear_analyze monitor on a recorded stochastic run gives the windows that
+        gear_monitor_reference --assess computes by simulating the same stream (the node's states
+        are the engine's bit for bit; 1e-12 leaves room for the CSVs' 17 digits)."""
+        healthy = os.path.join(PKG, 'test', 'ros', 'monitor_healthy.yaml')  # 0.7 s at 40 kHz, 2000 m/s^2
+        reference = os.path.join(self.folder, 'reference.yaml')
+        subprocess.run(['rosrun', 'gear_dynamics', 'gear_monitor_reference', '--output', reference, '--config',
+                        healthy, '--realizations', '20', '--windows', '4', '--false-alarm', '0.25'],
+                       check=True, capture_output=True, timeout=120)
+        bag = self.record(0.7, ('config:=' + healthy, 'realization:=5001'))
+        prefix = os.path.join(self.folder, 'bag')
+        got = analyze('monitor', '--reference', reference, '--bag', bag, '--output', prefix)
+        self.assertEqual(got.returncode, 0, got.stderr)
+        offline = os.path.join(self.folder, 'offline.csv')
+        subprocess.run(['rosrun', 'gear_dynamics', 'gear_monitor_reference', '--assess', reference, '--config',
+                        healthy, '--first', '5001', '--realizations', '1', '--windows', '8', '--csv', offline],
+                       check=True, capture_output=True, timeout=120)
+        with open(prefix + '_monitor.csv') as f:
+            from_bag = list(csv.DictReader(f))
+        with open(offline) as f:
+            simulated = list(csv.DictReader(f))
+        self.assertEqual(len(simulated), 8)
+        self.assertGreaterEqual(len(from_bag), 8, got.stdout)  # the run may hold a ninth whole window
+        names = [n for n in simulated[0] if n not in ('realization', 'window', 'load', 'band', 'level')]
+        for b, s in zip(from_bag, simulated):
+            self.assertEqual(b['window'], s['window'])
+            self.assertEqual(b['level'], s['level'])
+            for name in names:
+                self.assertAlmostEqual(float(b[name]), float(s[name]),
+                                       delta=1e-12 * max(abs(float(s[name])), 1e-300), msg=(b['window'], name))
+        # A bag sampled otherwise than the reference is refused, naming the rate it needs.
+        os.remove(bag)
+        slow_bag = self.record(0.2, ('config:=' + healthy, 'publish_rate:=1000', 't_end:=0.2'))
+        slow = analyze('monitor', '--reference', reference, '--bag', slow_bag, '--output', prefix)
+        self.assertEqual(slow.returncode, 1)
+        self.assertIn('publish_rate:=40000', slow.stderr)
 
 
 if __name__ == '__main__':

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "gear_dynamics/config/config.hpp"
+#include "gear_dynamics/model/mesh_schedule.hpp"
 #include "gear_dynamics/monitor/indicators.hpp"
 
 namespace gear_dynamics {
@@ -62,8 +63,10 @@ double revolution_angle(const GearPair& gear, FaultyGear which);  // [rad] of th
 int monitored_teeth(const GearPair& gear, FaultyGear which);
 double shaft_angle(const GearPair& gear, double t);  // theta1 = phi0 + Omega t [rad]
 IndicatorSettings indicator_settings(const GearPair& gear, const MonitorSettings& settings);
-// The monitored signal of lane `lane` now: delta [m] or the mesh force (gear_pair.hpp) [N].
-double monitored_value(const Ensemble& ensemble, int lane, MonitoredSignal signal);
+// The monitored signal of a state at time t: delta [m], or the mesh force the kernel integrates
+// (gear_pair.hpp's mesh_force with the schedule's e and its rate) [N].
+double monitored_signal(const GearPair& gear, const MeshSchedule& mesh, MonitoredSignal signal, double t,
+                        double stiffness, double delta, double delta_dot);
 
 // Runs stochastic realizations first .. first + count - 1 of `config` and returns each one's first
 // `windows` windows that start after `warmup`.

@@ -17,7 +17,7 @@ namespace {
 // Every subcommand, in the order of --help: a new one is one file and one line here.
 constexpr std::unique_ptr<analyze::Subcommand> (*kSubcommands[])() = {
     analyze::make_spectrum, analyze::make_stiffness, analyze::make_poincare,
-    analyze::make_bifurcation, analyze::make_lyapunov, analyze::make_safety,
+    analyze::make_bifurcation, analyze::make_lyapunov, analyze::make_safety, analyze::make_monitor,
 };
 
 void draw(const std::string& command, const analyze::Common& c) {

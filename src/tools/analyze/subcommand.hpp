@@ -38,5 +38,6 @@ std::unique_ptr<Subcommand> make_poincare();
 std::unique_ptr<Subcommand> make_bifurcation();
 std::unique_ptr<Subcommand> make_lyapunov();
 std::unique_ptr<Subcommand> make_safety();
+std::unique_ptr<Subcommand> make_monitor();
 
 }  // namespace gear_dynamics::tools::analyze
