@@ -83,7 +83,17 @@ def config(files=(), set=(), mu=None, seed=None):
     return _yaml.safe_load(_core.config_text(_listed(files), _sets(set), mu, seed))
 
 
-class Simulation(dict):
+class _Record(dict):
+    """A dict whose keys read as attributes too (result.delta for result["delta"])."""
+
+    def __getattr__(self, name):
+        try:
+            return self[name]
+        except KeyError:
+            raise AttributeError(name) from None
+
+
+class Simulation(_Record):
     """What simulate() returns: a dict with attribute access.
 
     names: run names, "S1" then "r0", "r1", ... (gear_run's CSV column run)
@@ -96,12 +106,6 @@ class Simulation(dict):
         final_delta_dot, final_load
     seed, time_step, duration: of the configuration that ran
     """
-
-    def __getattr__(self, name):
-        try:
-            return self[name]
-        except KeyError:
-            raise AttributeError(name) from None
 
 
 def simulate(files=(), set=(), mu=None, seed=None, realizations=2, deterministic=True, rate=1000.0):
@@ -191,7 +195,7 @@ def _progress_bar(progress, description):
     return update
 
 
-class EnsembleStatistics(dict):
+class EnsembleStatistics(_Record):
     """One grid point's streaming statistics (what ensemble_statistics() returns; a dict with
     attribute access). Over the recorded times t [s] of the stochastic realizations:
 
@@ -206,22 +210,10 @@ class EnsembleStatistics(dict):
     summary: per-realization results (realizations,) as Simulation.summary
     """
 
-    def __getattr__(self, name):
-        try:
-            return self[name]
-        except KeyError:
-            raise AttributeError(name) from None
 
-
-class StudyResult(dict):
+class StudyResult(_Record):
     """What study() returns: axes (the grid's keys), points (an EnsembleStatistics per point, the
     first axis varying slowest), quantiles, and the run's seed, time_step, duration."""
-
-    def __getattr__(self, name):
-        try:
-            return self[name]
-        except KeyError:
-            raise AttributeError(name) from None
 
     def frame(self):
         """Every realization's summary as a pandas DataFrame: one row per (point, realization), the
@@ -375,7 +367,7 @@ def assess(signal, shaft_angle, reference, load=None, files=(), set=()):
                         _listed(files), _sets(set))
 
 
-class Batch(dict):
+class Batch(_Record):
     """What read_batch() returns: a dict with attribute access.
 
     runs: columns of the runs, one entry per usable bag: name, kind ("S1", "phase",
@@ -388,12 +380,6 @@ class Batch(dict):
     axes, points: the study grid (axis 0 is gear_pair.friction_coefficient)
     config_text: the batch's model configuration as YAML
     """
-
-    def __getattr__(self, name):
-        try:
-            return self[name]
-        except KeyError:
-            raise AttributeError(name) from None
 
     def frame(self):
         """The runs as a pandas DataFrame (needs pandas), one row per run."""

@@ -21,6 +21,18 @@ struct LyapunovRuns {
   std::string what;    // "phases" or "values"
 };
 
+// PREFIX_lyapunov_running.csv: each run's running estimate over time (either method's results).
+template <class Result>
+void write_running(const Common& common, const LyapunovRuns& runs, const std::vector<Result>& res) {
+  const auto file = open_csv(common, "lyapunov_running");
+  std::ostream& out = file->out();
+  out << "id,value,t,running\n";
+  for (std::size_t i = 0; i < res.size(); ++i)
+    for (std::size_t k = 0; k < res[i].time.size(); ++k)
+      out << i << "," << runs.values[i] << "," << res[i].time[k] << "," << res[i].running[k] << "\n";
+}
+
+
 class Lyapunov : public Subcommand {
  public:
   std::string name() const override { return "lyapunov"; }
@@ -165,12 +177,7 @@ int Lyapunov::tangent(const Common& common, const ModelConfig& c, double h, cons
     for (const auto& w : res[i].windows)
       fw << i << "," << runs.values[i] << "," << w.start << "," << w.end << "," << w.exponent[0] << "," << w.exponent[1]
          << "," << w.trace << "\n";
-  const auto fr_file = open_csv(common, "lyapunov_running");
-  std::ostream& fr = fr_file->out();
-  fr << "id,value,t,running\n";
-  for (int i = 0; i < n; ++i)
-    for (std::size_t k = 0; k < res[i].time.size(); ++k)
-      fr << i << "," << runs.values[i] << "," << res[i].time[k] << "," << res[i].running[k] << "\n";
+  write_running(common, runs, res);
   std::printf("# lyapunov (tangent): h %g s, averaged over [%g, %g] s, orthonormalised every %lld steps (%g s), mu %g, "
               "%d %s, %.1f s wall\n",
               h, transient, so.duration, static_cast<long long>(so.orthonormalise_every), so.orthonormalise_every * h,
@@ -230,12 +237,7 @@ int Lyapunov::pairs(const Common& common, const ModelConfig& c, double h, const 
       << res[i].intervals << "\n";
     ex.push_back(res[i].exponent);
   }
-  const auto fr_file = open_csv(common, "lyapunov_running");
-  std::ostream& fr = fr_file->out();
-  fr << "id,value,t,running\n";
-  for (int i = 0; i < n; ++i)
-    for (std::size_t k = 0; k < res[i].time.size(); ++k)
-      fr << i << "," << runs.values[i] << "," << res[i].time[k] << "," << res[i].running[k] << "\n";
+  write_running(common, runs, res);
   double gmax = -1e300, gmin = 1e300;
   for (const auto& r : res) { gmax = std::max(gmax, r.max_log_growth); gmin = std::min(gmin, r.min_log_growth); }
   std::printf("# lyapunov (pairs): h %g s, transient %g s, averaged over %g s, renormalised every %lld steps (%g s), d0 %g "
