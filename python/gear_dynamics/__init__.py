@@ -100,7 +100,10 @@ class Simulation(_Record):
     t: sample times [s], shape (samples,); shaft_angle: the pinion's angle theta1 there [rad]
     delta, delta_dot, phi, center_distance: shape (runs, samples): the dynamic transmission error
         [m], its rate [m/s], the load Phi [m/s^2] and the instantaneous centre distance d(t)
-        over the trailing window [m s^-1/2]
+        over the trailing window [m s^-1/2]; with gear_pair.model: bearings, delta and delta_dot
+        are the mesh deflection delta_m and its rate, and further (runs, samples) arrays give
+        delta_t (the torsional coordinate) [m], mesh_force [N] and the bearing forces pinion_fx,
+        pinion_fy, wheel_fx, wheel_fy [N] (x across the line of action, y along it)
     summary: per-run arrays (runs,): center_distance, delta_range, delta_dot_range,
         steady_state_time, steady_state_time_fine, reached_steady_state (0/1), final_delta,
         final_delta_dot, final_load

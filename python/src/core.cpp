@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "gear_dynamics/config/config.hpp"
+#include "gear_dynamics/engine/bearings.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
 #include "gear_dynamics/engine/simulation.hpp"
 #include "gear_dynamics/dynamics/lyapunov.hpp"
@@ -96,6 +97,9 @@ py::dict simulate(const std::vector<std::string>& files, const std::vector<std::
   }
   const std::size_t nl = lanes.size();
   std::vector<double> t, delta, delta_dot, phi, dist;  // sample-major: [sample][lane]
+  // The bearings model's further outputs (gear_run's extra CSV columns), in the same layout.
+  const bool bearings = pc.gear.model == gd::GearModel::kBearings;
+  std::vector<double> delta_t, mesh_force, pinion_fx, pinion_fy, wheel_fx, wheel_fy;
   gd::Ensemble ensemble(gd::derive(pc.gear), pc.run.time_step, pc.initial, lanes, pc.seed);
   gd::Recorder recorder;
   recorder.every = check_every;
@@ -107,6 +111,15 @@ py::dict simulate(const std::vector<std::string>& files, const std::vector<std::
         delta_dot.push_back(e.velocity()[i]);
         phi.push_back(e.load()[i]);
         dist.push_back(d[i]);
+        if (bearings) {
+          const gd::BearingsOutputs o = gd::bearings_outputs(e, i);
+          delta_t.push_back(e.model_state()(gd::BearingsModel::kDelta, i));
+          mesh_force.push_back(o.mesh_force);
+          pinion_fx.push_back(o.pinion_fx);
+          pinion_fy.push_back(o.pinion_fy);
+          wheel_fx.push_back(o.wheel_fx);
+          wheel_fy.push_back(o.wheel_fy);
+        }
       }
     }
     py::gil_scoped_acquire gil;
@@ -145,6 +158,14 @@ py::dict simulate(const std::vector<std::string>& files, const std::vector<std::
   out["delta_dot"] = per_run(delta_dot);
   out["phi"] = per_run(phi);
   out["center_distance"] = per_run(dist);
+  if (bearings) {
+    out["delta_t"] = per_run(delta_t);
+    out["mesh_force"] = per_run(mesh_force);
+    out["pinion_fx"] = per_run(pinion_fx);
+    out["pinion_fy"] = per_run(pinion_fy);
+    out["wheel_fx"] = per_run(wheel_fx);
+    out["wheel_fy"] = per_run(wheel_fy);
+  }
   auto column = [&](auto get) {
     py::array_t<double> a(nr);
     auto m = a.mutable_unchecked<1>();

@@ -45,6 +45,9 @@ def read_csv(path):
 @pytest.mark.parametrize("sets,mu,seed,realizations,rate", [
     (["run.duration=0.02", "run.window=0.01"], None, 7, 3, 1000.0),
     (["run.duration=0.01", "run.window=0.004", "load.sigma=20"], 0.1, 123, 5, 20000.0),
+    # The bearings model: its every output, gear_run's extra columns, the same bits.
+    (["run.duration=0.01", "run.window=0.004", "gear_pair.model=bearings", "gear_pair.friction_direction=reversing"],
+     0.04, 11, 3, 20000.0),
 ])
 def test_simulate_equals_gear_run_bit_for_bit(tmp_path, sets, mu, seed, realizations, rate):
     args = sum((["--set", s] for s in sets), []) + ["--seed", str(seed), "--realizations", str(realizations),
@@ -65,6 +68,9 @@ def test_simulate_equals_gear_run_bit_for_bit(tmp_path, sets, mu, seed, realizat
         np.testing.assert_array_equal(sim.delta_dot[i], ref[name]["delta_dot"])
         np.testing.assert_array_equal(sim.phi[i], ref[name]["phi"])
         np.testing.assert_array_equal(sim.center_distance[i], ref[name]["center_distance"])
+        for column in ("delta_t", "mesh_force", "pinion_fx", "pinion_fy", "wheel_fx", "wheel_fy"):
+            if column in ref[name]:
+                np.testing.assert_array_equal(sim[column][i], ref[name][column], err_msg=column)
     # The last sample is t = T: the summary's final state is the series' last value.
     np.testing.assert_array_equal(sim.summary.final_delta, sim.delta[:, -1])
     assert sim.t[-1] == pytest.approx(sim.duration, abs=0.5e-9)
