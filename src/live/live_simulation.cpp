@@ -39,7 +39,66 @@ LaneSpec lane_of(const ModelConfig& c, const SimulatorSettings& s, LoadInput inp
   return lane;
 }
 
+// The torsional model: Realization, the SIMD kernel's arithmetic one lane at a time.
+class TorsionalLive final : public LiveModel {
+ public:
+  TorsionalLive(const GearPair& gear, double h, const InitialState& initial, const LaneSpec& lane, std::uint64_t seed)
+      : r_(gear, h, initial, lane, seed) {}
+  RealizationBase& realization() override { return r_; }
+  const RealizationBase& realization() const override { return r_; }
+  void step() override { r_.step(); }
+  void reset() override { r_.reset(); }
+  double deflection() const override { return r_.delta(); }
+  double deflection_rate() const override { return r_.velocity(); }
+  double mesh_force() const override {
+    const double t = r_.time();
+    return gear_dynamics::mesh_force(r_.gear(), r_.mesh().stiffness(t), r_.delta(), r_.velocity(),
+                                     r_.mesh().transmission_error(t), r_.mesh().transmission_error_rate(t));
+  }
+  void describe(LiveSample& s) const override {
+    s.delta = s.delta_t = r_.delta();
+    s.delta_dot = s.delta_t_dot = r_.velocity();
+  }
+
+ private:
+  Realization r_;
+};
+
+// The bearings model: BearingsRealization, bearings_step as in the batch's lanes.
+class BearingsLive final : public LiveModel {
+ public:
+  BearingsLive(const GearPair& gear, double h, const InitialState& initial, const LaneSpec& lane, std::uint64_t seed)
+      : r_(gear, h, initial, lane, seed) {}
+  RealizationBase& realization() override { return r_; }
+  const RealizationBase& realization() const override { return r_; }
+  void step() override { r_.step(); }
+  void reset() override { r_.reset(); }
+  double deflection() const override { return r_.model().deflection(r_.state()); }
+  double deflection_rate() const override { return r_.model().deflection_rate(r_.state()); }
+  double mesh_force() const override { return r_.outputs().mesh_force; }
+  void describe(LiveSample& s) const override {
+    const BearingsOutputs o = r_.outputs();
+    s.delta = o.delta_m;
+    s.delta_dot = o.delta_m_dot;
+    s.delta_t = r_.state()[BearingsModel::kDelta];
+    s.delta_t_dot = r_.state()[BearingsModel::kDeltaDot];
+    s.bearings = o;
+  }
+
+ private:
+  BearingsRealization r_;
+};
+
 }  // namespace
+
+std::unique_ptr<LiveModel> make_live_model(const GearPair& gear, double time_step, const InitialState& initial,
+                                           const LaneSpec& lane, std::uint64_t seed) {
+  switch (gear.in.model) {
+    case GearModel::kBearings: return std::make_unique<BearingsLive>(gear, time_step, initial, lane, seed);
+    case GearModel::kTorsional: break;
+  }
+  return std::make_unique<TorsionalLive>(gear, time_step, initial, lane, seed);
+}
 
 LoadInput load_input_from_string(const std::string& name) {
   if (name == "sde") return LoadInput::Sde;
@@ -83,8 +142,9 @@ LiveSimulation::LiveSimulation(const ModelConfig& config, const SimulatorSetting
       end_step_(config.run.steps_for(settings.t_end)),
       spectrum_(spectrum_sampling(settings, config.run.time_step)),
       gear_(derive(config.gear)),
-      realization_(gear_, config.run.time_step, config.initial, lane_of(config, settings, load_input_),
-                   config.seed),
+      model_(make_live_model(gear_, config.run.time_step, config.initial, lane_of(config, settings, load_input_),
+                             config.seed)),
+      realization_(model_->realization()),
       real_time_factor_(settings.real_time_factor),
       publish_rate_(settings.publish_rate),
       period_(publish_period_steps(publish_rate_, config.run.time_step)),
@@ -366,10 +426,10 @@ void LiveSimulation::advance() {
     while (n < to) {
       if (stop_.load(std::memory_order_relaxed)) break;
       if (load_pending_.load(std::memory_order_acquire)) take_load_command();
-      realization_.step();
+      model_->step();
       n = realization_.step_index();
       if (n == next_sample_) take_spectrum_sample(n);
-      const double d = realization_.delta(), v = realization_.velocity();
+      const double d = model_->deflection(), v = model_->deflection_rate();
       hi_d = std::max(hi_d, d);
       lo_d = std::max(lo_d, -d);
       hi_v = std::max(hi_v, v);
@@ -405,7 +465,7 @@ void LiveSimulation::advance() {
 }
 
 LiveSample LiveSimulation::sample() const {
-  const Realization& e = realization_;
+  const RealizationBase& e = realization_;
   LiveSample s;
   s.step = e.step_index();
   const auto due = anchored_ && real_time_factor_ > 0.0
@@ -415,8 +475,7 @@ LiveSample LiveSimulation::sample() const {
                        : clock_.now();
   s.clock_time = std::chrono::duration<double>(due.time_since_epoch()).count();
   s.t = grid_time(s.step, e.time_step());
-  s.delta = e.delta();
-  s.delta_dot = e.velocity();
+  model_->describe(s);
   s.phi = e.load();
   s.mesh_stiffness = e.mesh().stiffness(e.time());
   s.mesh_phase = e.mesh().phase(e.time());
@@ -429,10 +488,8 @@ LiveSample LiveSimulation::sample() const {
 }
 
 void LiveSimulation::take_spectrum_sample(std::int64_t n) {
-  const Realization& e = realization_;
-  const double t = e.time();
-  spectrum_samples_.push(e.delta(), mesh_force(gear_, e.mesh().stiffness(t), e.delta(), e.velocity(),
-                                               e.mesh().transmission_error(t), e.mesh().transmission_error_rate(t)));
+  const RealizationBase& e = realization_;
+  spectrum_samples_.push(model_->deflection(), model_->mesh_force());
   next_sample_ += spectrum_.sample_steps;
   if (n != next_update_) return;
   next_update_ += spectrum_.update_steps;
@@ -482,10 +539,10 @@ void LiveSimulation::publish_run_info() {
 }
 
 void LiveSimulation::restart() {
-  realization_.reset();
+  model_->reset();
   window_ = make_window();
-  window_.observe_extrema(0, realization_.delta(), -realization_.delta(), realization_.velocity(),
-                          -realization_.velocity());
+  window_.observe_extrema(0, model_->deflection(), -model_->deflection(), model_->deflection_rate(),
+                          -model_->deflection_rate());
   finished_ = diverged_ = false;
   divergence_.clear();
   anchored_ = false;

@@ -14,6 +14,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -22,6 +23,7 @@
 
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/config/simulator_settings.hpp"
+#include "gear_dynamics/engine/bearings.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
 #include "gear_dynamics/engine/realization.hpp"
 #include "gear_dynamics/engine/observers.hpp"
@@ -42,7 +44,13 @@ std::string to_string(LoadInput mode);
 struct LiveSample {
   std::int64_t step = 0;  // grid index n; t = n h
   double t = 0.0;         // grid_time(n, h): n h rounded to whole ns (engine/simulation.hpp) [s]
+  // The mesh deflection and its rate (delta_m in the bearings model, as the batch's GearState).
   double delta = 0.0, delta_dot = 0.0, phi = 0.0;
+  // The torsional coordinate Rb1 theta1 - Rb2 theta2 and its rate (the gears' angles): delta itself
+  // in the torsional model.
+  double delta_t = 0.0, delta_t_dot = 0.0;
+  // The bearings model's outputs (doc/model.md §11); empty for the torsional model.
+  std::optional<BearingsOutputs> bearings;
   double center_distance = 0.0;  // d(t) over the trailing window (0 if the sink did not want it)
   double mesh_stiffness = 0.0, mesh_phase = 0.0;
   double mu = 0.0, sigma = 0.0, drift = 0.0;
@@ -137,6 +145,27 @@ class SteadyLiveClock : public LiveClock {
   time_point now() const override { return std::chrono::steady_clock::now(); }
 };
 
+// The live loop's one seam to the model (doc/architecture.md §2): one realization of the model that
+// gear_pair.model names, stepped one grid step at a time by that model's own one-realization path
+// (Realization, BearingsRealization), so a live run is the batch's realization bit for bit.
+class LiveModel {
+ public:
+  virtual ~LiveModel() = default;
+  // The time grid, lane, random stream and load, and their run-time changes (mu, sigma, lambda, Phi).
+  virtual RealizationBase& realization() = 0;
+  virtual const RealizationBase& realization() const = 0;
+  virtual void step() = 0;  // one grid step; throws DivergenceError on a non-finite state
+  virtual void reset() = 0;  // t = 0, the initial state, the random stream from its start
+  // The mesh deflection and its rate, what the trailing window observes; the mesh force [N].
+  virtual double deflection() const = 0;
+  virtual double deflection_rate() const = 0;
+  virtual double mesh_force() const = 0;
+  // The model's fields of a sample: delta, delta_dot, delta_t, delta_t_dot and the outputs.
+  virtual void describe(LiveSample& s) const = 0;
+};
+// The realization of lane `lane` of `gear`'s model (gear.in.model): the one place that dispatches on it.
+std::unique_ptr<LiveModel> make_live_model(const GearPair& gear, double time_step, const InitialState& initial,
+                                           const LaneSpec& lane, std::uint64_t seed);
 
 class LiveSimulation {
  public:
@@ -214,8 +243,8 @@ class LiveSimulation {
   Outcome last_outcome() const;
 
   // ---- the stepping loop's own view (read it from the stepping thread or between iterate()) ----
-  // The one realization, stepped by the one-lane path (bit for bit its path in a batch block).
-  const Realization& realization() const { return realization_; }
+  // The one realization, stepped by its model's one-lane path (bit for bit its path in a batch block).
+  const RealizationBase& realization() const { return model_->realization(); }
   std::int64_t period_steps() const { return period_; }
   std::int64_t end_step() const { return end_step_; }
   bool paused() const { return paused_; }
@@ -254,10 +283,11 @@ class LiveSimulation {
   const LoadInput load_input_;
   const std::int64_t end_step_;  // 0 = run on forever
   const SpectrumSampling spectrum_;
-  const GearPair gear_;  // for the mesh force and f_m of the spectrum samples
+  const GearPair gear_;  // for f_m of the spectrum samples
 
   // Owned by the stepping loop.
-  Realization realization_;
+  const std::unique_ptr<LiveModel> model_;
+  RealizationBase& realization_;  // *model_'s
   double real_time_factor_, publish_rate_;
   std::int64_t period_;  // grid steps per publish period
   WindowRange window_;   // trailing-window ranges for the center distance d(t)

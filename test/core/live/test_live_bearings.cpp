@@ -1,0 +1,141 @@
+// The live loop with gear_pair.model: bearings (LiveModel, doc/architecture.md §2): its published
+// samples are BearingsRealization's states stepped directly, bit for bit (the same bearings_step,
+// the same random stream), also across a run-time change of mu and a reset; the torsional model's
+// samples carry no bearings outputs and delta_t = delta.
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "gear_dynamics/config/config.hpp"
+#include "gear_dynamics/config/simulator_settings.hpp"
+#include "gear_dynamics/engine/bearings.hpp"
+#include "gear_dynamics/live/live_simulation.hpp"
+
+namespace gd = gear_dynamics;
+
+namespace {
+
+struct Loaded {
+  gd::ModelConfig model;
+  gd::SimulatorSettings sim;
+};
+
+// The shipped config/*.yaml with `overlay` (YAML text) merged on top: real_time_factor 0 (no
+// pacing), a state every 100 grid steps, 10 ms.
+Loaded load(const std::string& overlay) {
+  const std::string dir = GEAR_DYNAMICS_CONFIG_DIR;
+  YAML::Node root = gd::read_yaml_files({dir + "/gear_pair.yaml", dir + "/load.yaml", dir + "/run.yaml",
+                                         dir + "/simulator.yaml"});
+  gd::merge_yaml(root, YAML::Load("simulator: {real_time_factor: 0.0, publish_rate: 4000, t_end: 0.01}"));
+  gd::merge_yaml(root, YAML::Load(overlay));
+  Loaded l;
+  l.model = gd::parse_config(root);
+  l.sim = gd::parse_simulator_settings(root, l.model.run.time_step);
+  return l;
+}
+
+struct RecordingSink : gd::LiveSink {
+  std::vector<gd::LiveSample> samples;
+  void publish(const gd::LiveSample& s) override { samples.push_back(s); }
+  void run_info(const gd::LiveRunInfo&) override {}
+  void log(gd::LiveLogLevel, const std::string&) override {}
+};
+
+void run_until_stopped(gd::LiveSimulation& sim) {
+  for (int i = 0; i < 100000; ++i)
+    if (!sim.iterate().running) return;
+}
+
+// Every field the model gives a sample, equal (bit for bit) to the realization's.
+void expect_sample_is(const gd::LiveSample& s, const gd::BearingsRealization& r) {
+  SCOPED_TRACE("step " + std::to_string(s.step));
+  ASSERT_EQ(s.step, r.step_index());
+  ASSERT_TRUE(s.bearings.has_value());
+  const gd::BearingsOutputs o = r.outputs();
+  EXPECT_EQ(s.delta, o.delta_m);
+  EXPECT_EQ(s.delta_dot, o.delta_m_dot);
+  EXPECT_EQ(s.delta_t, r.state()[gd::BearingsModel::kDelta]);
+  EXPECT_EQ(s.delta_t_dot, r.state()[gd::BearingsModel::kDeltaDot]);
+  EXPECT_EQ(s.phi, r.load());
+  EXPECT_EQ(s.bearings->delta_m, o.delta_m);
+  EXPECT_EQ(s.bearings->delta_m_dot, o.delta_m_dot);
+  EXPECT_EQ(s.bearings->mesh_force, o.mesh_force);
+  EXPECT_EQ(s.bearings->pinion_fx, o.pinion_fx);
+  EXPECT_EQ(s.bearings->pinion_fy, o.pinion_fy);
+  EXPECT_EQ(s.bearings->wheel_fx, o.wheel_fx);
+  EXPECT_EQ(s.bearings->wheel_fy, o.wheel_fy);
+}
+
+}  // namespace
+
+TEST(LiveBearings, SamplesAreTheRealizationSteppedDirectly) {
+  // The stochastic load and reversing friction: every term of bearings_step is exercised.
+  const Loaded l = load("gear_pair: {model: bearings, friction_direction: reversing}");
+  RecordingSink sink;
+  gd::LiveSimulation sim(l.model, l.sim, sink);
+  run_until_stopped(sim);
+  ASSERT_TRUE(sim.finished());
+  ASSERT_EQ(sink.samples.size(), 41u);  // t = 0 and every 0.25 ms to 10 ms
+
+  gd::BearingsRealization r(gd::derive(l.model.gear), l.model.run.time_step, l.model.initial,
+                            gd::stochastic_lane(l.model, l.model.friction_coefficient, l.sim.realization),
+                            l.model.seed);
+  for (const gd::LiveSample& s : sink.samples) {
+    while (r.step_index() < s.step) r.step();
+    expect_sample_is(s, r);
+  }
+  // Not a trivial path: the mesh carries the load and the friction moves the bodies across the LOA.
+  bool loaded = false, across = false;
+  for (const gd::LiveSample& s : sink.samples) {
+    loaded = loaded || s.bearings->mesh_force > 0.0;
+    across = across || s.bearings->pinion_fx != 0.0;
+  }
+  EXPECT_TRUE(loaded);
+  EXPECT_TRUE(across);
+}
+
+TEST(LiveBearings, MuChangeAndResetFollowTheRealization) {
+  const Loaded l = load("gear_pair: {model: bearings}");
+  RecordingSink sink;
+  gd::LiveSimulation sim(l.model, l.sim, sink);
+  sim.iterate();  // to step 100
+  gd::LiveSimulation::Request q;
+  q.mu = 0.15;
+  sim.post(q);
+  sim.iterate();  // applied at step 100, then to step 200
+  sim.iterate();  // to step 300
+  ASSERT_EQ(sink.samples.back().step, 300);
+
+  gd::BearingsRealization r(gd::derive(l.model.gear), l.model.run.time_step, l.model.initial,
+                            gd::stochastic_lane(l.model, l.model.friction_coefficient, l.sim.realization),
+                            l.model.seed);
+  while (r.step_index() < 100) r.step();
+  r.set_mu(0.15);
+  while (r.step_index() < 300) r.step();
+  expect_sample_is(sink.samples.back(), r);
+
+  // A reset starts the realization over, with the mu in effect: t = 0 again, then its path.
+  q = gd::LiveSimulation::Request{};
+  q.reset = true;
+  sim.post(q);
+  sim.iterate();
+  gd::BearingsRealization again(gd::derive(l.model.gear), l.model.run.time_step, l.model.initial,
+                                gd::stochastic_lane(l.model, 0.15, l.sim.realization), l.model.seed);
+  ASSERT_GE(sink.samples.size(), 2u);
+  expect_sample_is(sink.samples[sink.samples.size() - 2], again);  // the reset's t = 0
+  while (again.step_index() < 100) again.step();
+  expect_sample_is(sink.samples.back(), again);
+}
+
+TEST(LiveBearings, TorsionalSamplesCarryNoBearings) {
+  const Loaded l = load("{}");
+  RecordingSink sink;
+  gd::LiveSimulation sim(l.model, l.sim, sink);
+  sim.iterate();
+  for (const gd::LiveSample& s : sink.samples) {
+    EXPECT_FALSE(s.bearings.has_value());
+    EXPECT_EQ(s.delta_t, s.delta);
+    EXPECT_EQ(s.delta_t_dot, s.delta_dot);
+  }
+}
