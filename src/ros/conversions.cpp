@@ -2,6 +2,8 @@
 
 #include <xmlrpcpp/XmlRpcValue.h>
 
+#include <cmath>
+
 #include "gear_dynamics/batch/manifest.hpp"  // package_version
 
 namespace gear_dynamics {
@@ -53,12 +55,6 @@ YAML::Node yaml_from_namespace(const ros::NodeHandle& nh) {
 
 ModelConfig load_model_config(const ros::NodeHandle& nh) {
   return parse_config(yaml_from_parameters(nh, {"gear_pair", "load", "run"}));
-}
-
-void require_live_model(const ModelConfig& c) {
-  if (c.gear.model != GearModel::kTorsional)  // the live loop steps Realization (doc/architecture.md §2)
-    throw ConfigError("gear_pair.model = bearings is not run by gear_simulator; allowed: torsional "
-                      "(gear_run and the batch run bearings)");
 }
 
 RunInfo make_run_info(const ModelConfig& config, RunKind kind, std::uint32_t realization,
@@ -176,6 +172,22 @@ geometry_msgs::WrenchStamped make_bearing_wrench(double t, const char* frame, do
   m.wrench.force.x = fx;
   m.wrench.force.y = fy;
   return m;
+}
+
+std::vector<geometry_msgs::TransformStamped> make_bearing_frames(const GearPair& g, const ros::Time& stamp) {
+  const double alpha = g.operating_pressure_angle;
+  const double centre_distance = (g.base_radius1 + g.base_radius2) / std::cos(alpha);
+  const auto frame = [&](const char* child, double x) {
+    geometry_msgs::TransformStamped m;
+    m.header.stamp = stamp;
+    m.header.frame_id = kGearPairFrame;
+    m.child_frame_id = child;
+    m.transform.translation.x = x;
+    m.transform.rotation.z = std::sin(-0.5 * alpha);  // about z by -alpha_w
+    m.transform.rotation.w = std::cos(-0.5 * alpha);
+    return m;
+  };
+  return {frame(kPinionBearingFrame, 0.0), frame(kWheelBearingFrame, centre_distance)};
 }
 
 BearingSummary make_bearing_summary(const std::string& run_name, const RunSettings& run, const BearingForces& f) {

@@ -63,15 +63,16 @@ std::vector<std::pair<std::string, double SimulatorConfig::*>> double_parameters
 }
 
 // The two gears as joints (doc/gear_simulator.md §3.3): the pinion turns at the constant nominal
-// speed, theta1 = phi0 + Omega t (doc/model.md D3), and delta = Rb1 theta1 - Rb2 theta2 gives the
-// wheel's angle; positive theta2 turns the wheel the way the pinion drives it.
+// speed, theta1 = phi0 + Omega t (doc/model.md D3), and the torsional coordinate
+// delta_t = Rb1 theta1 - Rb2 theta2 (delta itself in the torsional model) gives the wheel's angle;
+// positive theta2 turns the wheel the way the pinion drives it.
 sensor_msgs::JointState make_joint_state(const LiveSample& s, const GearPair& g, const ros::Time& stamp) {
   sensor_msgs::JointState m;
   m.header.stamp = stamp;
   m.name = {"pinion_joint", "wheel_joint"};
   const double theta1 = g.in.mesh_phase + g.in.pinion_speed * s.t;
-  m.position = {theta1, (g.base_radius1 * theta1 - s.delta) / g.base_radius2};
-  m.velocity = {g.in.pinion_speed, (g.base_radius1 * g.in.pinion_speed - s.delta_dot) / g.base_radius2};
+  m.position = {theta1, (g.base_radius1 * theta1 - s.delta_t) / g.base_radius2};
+  m.velocity = {g.in.pinion_speed, (g.base_radius1 * g.in.pinion_speed - s.delta_t_dot) / g.base_radius2};
   return m;
 }
 
@@ -97,11 +98,7 @@ void RefusingConfig::__clamp__() {
 GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& private_nh)
     : nh_(nh),
       private_nh_(private_nh),
-      config_([&] {
-        ModelConfig c = load_model_config(private_nh);
-        require_live_model(c);
-        return c;
-      }()),
+      config_(load_model_config(private_nh)),
       gear_(derive(config_.gear)),
       settings_(load_settings(private_nh, config_.run.time_step)),
       reconfigure_server_(reconfigure_mutex_, private_nh),
@@ -116,6 +113,19 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
     delta_dot_ = CountedPublisher::advertise<std_msgs::Float64>(nh_, "delta_dot", kQueue);
     phi_ = CountedPublisher::advertise<std_msgs::Float64>(nh_, "phi", kQueue);
     center_distance_ = CountedPublisher::advertise<std_msgs::Float64>(nh_, "center_distance", kQueue);
+  }
+  if (gear_.in.model == GearModel::kBearings) {
+    mesh_ = CountedPublisher::advertise<MeshState>(nh_, "mesh", kQueue);
+    pinion_wrench_ = CountedPublisher::advertise<geometry_msgs::WrenchStamped>(nh_, "pinion_bearing/wrench", kQueue);
+    wheel_wrench_ = CountedPublisher::advertise<geometry_msgs::WrenchStamped>(nh_, "wheel_bearing/wrench", kQueue);
+    // The wrenches' frames follow the configured gear (alpha_w from pressure_angle and the profile
+    // shifts, which a URDF cannot compute): published here, latched, not in urdf/gear_pair.urdf.
+    bearing_frames_ = std::make_unique<tf2_ros::StaticTransformBroadcaster>();
+    bearing_frames_->sendTransform(make_bearing_frames(gear_, sim_stamp(0.0)));
+    ROS_INFO("gear_simulator: the bearings model: state's delta is delta_m; %s, %s and %s at every state, in the "
+             "frames %s and %s (/tf_static, turned by -alpha_w = %g rad)",
+             mesh_.topic.c_str(), pinion_wrench_.topic.c_str(), wheel_wrench_.topic.c_str(), kPinionBearingFrame,
+             kWheelBearingFrame, -gear_.operating_pressure_angle);
   }
   if (settings_.publish_clock) clock_pub_ = nh_.advertise<rosgraph_msgs::Clock>("/clock", 10);
   run_info_pub_ = nh_.advertise<RunInfo>("run_info", 1, /*latch=*/true);
@@ -132,6 +142,7 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
   held_.reserve(5 * kBurst + 5);
   batch_.states.reserve(kBurst + 2);
   held_joints_.reserve(kBurst + 2);
+  held_bearings_.reserve(kBurst + 2);
   following_ = !settings_.publish_clock && ros::Time::isSimTime();
   if (following_)
     ROS_INFO("gear_simulator: publish_clock false under /use_sim_time: this node follows the clock owner's /clock "
@@ -488,6 +499,22 @@ void GearSimulator::hold(const LiveSample& s, bool record_it) {
     scalar(phi_, s.phi);
     scalar(center_distance_, s.center_distance);
   }
+  if (s.bearings) hold_bearings(s, stamp, recording);
+}
+
+void GearSimulator::hold_bearings(const LiveSample& s, const ros::Time& stamp, bool recording) {
+  if (!recording && !mesh_.wanted() && !pinion_wrench_.wanted() && !wheel_wrench_.wanted()) return;
+  const BearingsOutputs& o = *s.bearings;
+  // The batch bags' conversions (BagSink::recorded), stamped as this node's state.
+  HeldBearings h{make_mesh_state(s.t, o, s.delta_t), make_bearing_wrench(s.t, kPinionBearingFrame, o.pinion_fx, o.pinion_fy),
+                 make_bearing_wrench(s.t, kWheelBearingFrame, o.wheel_fx, o.wheel_fy)};
+  h.mesh.header.stamp = h.pinion.header.stamp = h.wheel.header.stamp = stamp;
+  if (recording) {
+    record(mesh_.topic, stamp, h.mesh);
+    record(pinion_wrench_.topic, stamp, h.pinion);
+    record(wheel_wrench_.topic, stamp, h.wheel);
+  }
+  held_bearings_.push_back(std::move(h));
 }
 
 void GearSimulator::flush() {
@@ -507,6 +534,17 @@ void GearSimulator::flush() {
   for (const sensor_msgs::JointState& j : held_joints_) joint_states_.pub.publish(j);
   scalars += held_joints_.size();  // one more topic with a message per instant
   held_joints_.clear();
+  for (const HeldBearings& h : held_bearings_) {
+    const auto send = [&](const CountedPublisher& p, const auto& m) {
+      if (!p.wanted()) return;
+      p.pub.publish(m);
+      ++scalars;
+    };
+    send(mesh_, h.mesh);
+    send(pinion_wrench_, h.pinion);
+    send(wheel_wrench_, h.wheel);
+  }
+  held_bearings_.clear();
   sent = states + scalars;
   if (!batch_.states.empty()) {
     batch_.header.stamp = batch_.states.back().header.stamp;

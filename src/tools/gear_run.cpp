@@ -167,9 +167,6 @@ int main(int argc, char** argv) try {
     try {
       const gd::ModelConfig model = gd::parse_config(root);
       gd::parse_simulator_settings(root, model.run.time_step);
-      if (model.gear.model != gd::GearModel::kTorsional)  // as require_live_model (src/ros/conversions.cpp)
-        throw gd::ConfigError("gear_pair.model = bearings is not run by gear_simulator; allowed: torsional "
-                              "(gear_run and the batch run bearings)");
     } catch (const gd::ConfigError& e) {
       std::fprintf(stderr, "gear_simulator would refuse to start: %s\n", e.what());
       return 1;

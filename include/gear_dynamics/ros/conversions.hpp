@@ -7,7 +7,9 @@
 #include <ros/time.h>
 
 #include <string>
+#include <vector>
 
+#include <geometry_msgs/TransformStamped.h>
 #include <geometry_msgs/WrenchStamped.h>
 
 #include "gear_dynamics/BearingSummary.h"
@@ -36,8 +38,6 @@ YAML::Node yaml_from_parameters(const ros::NodeHandle& nh, const std::vector<std
 // Every parameter of `nh`'s namespace as one YAML map (empty if it holds none).
 YAML::Node yaml_from_namespace(const ros::NodeHandle& nh);
 ModelConfig load_model_config(const ros::NodeHandle& nh);
-// Throws ConfigError if the live node cannot run c's model.
-void require_live_model(const ModelConfig& c);
 
 // The topics of a run bag (doc/batch-folder.md §2, §5); the manifest is batch/manifest.hpp's.
 constexpr const char* kRunInfoTopic = "/gear/run_info";
@@ -52,6 +52,7 @@ constexpr const char* kMeshTopic = "/gear/mesh";
 constexpr const char* kPinionBearingTopic = "/gear/pinion_bearing/wrench";
 constexpr const char* kWheelBearingTopic = "/gear/wheel_bearing/wrench";
 constexpr const char* kBearingSummaryTopic = "/gear/bearing_summary";
+constexpr const char* kGearPairFrame = "gear_pair";
 constexpr const char* kPinionBearingFrame = "pinion_bearing";
 constexpr const char* kWheelBearingFrame = "wheel_bearing";
 
@@ -74,6 +75,12 @@ RunSummary make_summary(const std::string& run_name, RunKind kind,
 // bearing as a wrench (force only) in `frame`.
 MeshState make_mesh_state(double t, const BearingsOutputs& outputs, double delta_t);
 geometry_msgs::WrenchStamped make_bearing_wrench(double t, const char* frame, double fx, double fy);
+// The frames the bearing forces are given in, as static transforms from the frame gear_pair of
+// urdf/gear_pair.urdf (the pinion's axis, x towards the wheel's): pinion_bearing at the pinion's axis,
+// wheel_bearing at the wheel's, the working centre distance a_w = (Rb1 + Rb2)/cos(alpha_w) away,
+// both turned about z by -alpha_w, the working pressure angle, so that y runs along the line of
+// action from the pinion's base-circle tangent point towards the wheel's (doc/model.md §11).
+std::vector<geometry_msgs::TransformStamped> make_bearing_frames(const GearPair& gear, const ros::Time& stamp);
 // The window's statistics of a bearings run (RunResult::bearings).
 BearingSummary make_bearing_summary(const std::string& run_name, const RunSettings& run, const BearingForces& forces);
 

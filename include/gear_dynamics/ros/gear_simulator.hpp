@@ -5,11 +5,13 @@
 #pragma once
 
 #include <dynamic_reconfigure/server.h>
+#include <geometry_msgs/WrenchStamped.h>
 #include <ros/ros.h>
 #include <sensor_msgs/JointState.h>
 #include <std_srvs/Empty.h>
 #include <std_msgs/Float64.h>
 #include <std_srvs/Trigger.h>
+#include <tf2_ros/static_transform_broadcaster.h>
 
 #include <boost/thread/recursive_mutex.hpp>
 #include <chrono>
@@ -25,6 +27,7 @@
 
 #include "gear_dynamics/GearState.h"
 #include "gear_dynamics/GearStateBatch.h"
+#include "gear_dynamics/MeshState.h"
 #include "gear_dynamics/SimulatorConfig.h"
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/config/simulator_settings.hpp"
@@ -90,6 +93,8 @@ class GearSimulator : private LiveSink {
   void flush() override;  // publishes the held burst, and it as one state_batch (stepping thread)
   // Holds the messages of `s` for the topics that want them; into the bag with `record_it`.
   void hold(const LiveSample& s, bool record_it);
+  // The same for the bearings model's outputs (mesh and the two bearing wrenches), stamped `stamp`.
+  void hold_bearings(const LiveSample& s, const ros::Time& stamp, bool recording);
   // At real_time_factor 0: sleeps so that the messages sent stay within kFullSpeedMessageRate.
   void pace_messages(std::size_t sent, std::size_t busiest_topic);
   void spectrum(const SpectrumSamples& window) override;  // hands the window to spectrum_
@@ -156,6 +161,11 @@ class GearSimulator : private LiveSink {
   std::chrono::steady_clock::time_point held_since_;
   GearStateBatch batch_;  // reused: its vector keeps its capacity
   std::vector<sensor_msgs::JointState> held_joints_;  // joint_states of the burst
+  struct HeldBearings {  // the bearings model's messages of one publish instant
+    MeshState mesh;
+    geometry_msgs::WrenchStamped pinion, wheel;
+  };
+  std::vector<HeldBearings> held_bearings_;
   std::chrono::steady_clock::time_point message_budget_;  // pace_messages
   std::size_t instants_held_ = 0;  // publish instants in held_
   // A run started paused publishes t = 0 before anyone can have subscribed: that sample goes out
@@ -184,6 +194,9 @@ class GearSimulator : private LiveSink {
 
   // ROS interfaces (the sink runs on the stepping thread; roscpp publishers are thread-safe).
   CountedPublisher state_, state_batch_, joint_states_, delta_, delta_dot_, phi_, center_distance_;
+  // The bearings model's (gear_pair.model: bearings): the batch bags' topics, and its frames on /tf_static.
+  CountedPublisher mesh_, pinion_wrench_, wheel_wrench_;
+  std::unique_ptr<tf2_ros::StaticTransformBroadcaster> bearing_frames_;
   ros::Publisher clock_pub_, run_info_pub_, final_state_pub_;
   ros::Subscriber load_sub_;
   ros::ServiceServer pause_srv_, unpause_srv_, reset_srv_, step_srv_;
