@@ -120,8 +120,9 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
     wheel_wrench_ = CountedPublisher::advertise<geometry_msgs::WrenchStamped>(nh_, "wheel_bearing/wrench", kQueue);
     // The wrenches' frames follow the configured gear (alpha_w from pressure_angle and the profile
     // shifts, which a URDF cannot compute): published here, latched, not in urdf/gear_pair.urdf.
+    bearing_frames_msg_.transforms = make_bearing_frames(gear_, sim_stamp(0.0));
     bearing_frames_ = std::make_unique<tf2_ros::StaticTransformBroadcaster>();
-    bearing_frames_->sendTransform(make_bearing_frames(gear_, sim_stamp(0.0)));
+    bearing_frames_->sendTransform(bearing_frames_msg_.transforms);
     ROS_INFO("gear_simulator: the bearings model: state's delta is delta_m; %s, %s and %s at every state, in the "
              "frames %s and %s (/tf_static, turned by -alpha_w = %g rad)",
              mesh_.topic.c_str(), pinion_wrench_.topic.c_str(), wheel_wrench_.topic.c_str(), kPinionBearingFrame,
@@ -270,6 +271,8 @@ void GearSimulator::record_open() {
     throw ConfigError("record: cannot write " + path + ".active: " + e.what());
   }
   ROS_INFO("record: writing every published message into %s", path.c_str());
+  // The frames of the bearing wrenches, so that the bag alone says where its forces point.
+  if (!bearing_frames_msg_.transforms.empty()) recorder_->write("/tf_static", sim_stamp(0.0), bearing_frames_msg_);
 }
 
 void GearSimulator::record_close() {

@@ -11,6 +11,7 @@
 #include <std_srvs/Empty.h>
 #include <std_msgs/Float64.h>
 #include <std_srvs/Trigger.h>
+#include <tf2_msgs/TFMessage.h>
 #include <tf2_ros/static_transform_broadcaster.h>
 
 #include <boost/thread/recursive_mutex.hpp>
@@ -197,6 +198,7 @@ class GearSimulator : private LiveSink {
   // The bearings model's (gear_pair.model: bearings): the batch bags' topics, and its frames on /tf_static.
   CountedPublisher mesh_, pinion_wrench_, wheel_wrench_;
   std::unique_ptr<tf2_ros::StaticTransformBroadcaster> bearing_frames_;
+  tf2_msgs::TFMessage bearing_frames_msg_;  // what it sent, for the head of every bag
   ros::Publisher clock_pub_, run_info_pub_, final_state_pub_;
   ros::Subscriber load_sub_;
   ros::ServiceServer pause_srv_, unpause_srv_, reset_srv_, step_srv_;
