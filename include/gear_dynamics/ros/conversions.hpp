@@ -46,8 +46,8 @@ constexpr const char* kSummaryTopic = "/gear/summary";
 // The Poincare section of a deterministic run (S1, phase): one PoincarePoint per mesh period.
 constexpr const char* kPoincareTopic = "/gear/poincare";
 // gear_pair.model = bearings adds, at each recorded state, the mesh and the force each body puts on
-// its bearing (a wrench in the bearing's frame of urdf/gear_pair.urdf), and the window's statistics
-// of those forces at the end.
+// its bearing (a wrench in the bearing's frame, make_bearing_frames), and the window's statistics
+// of those forces at the end (batch only). gear_simulator publishes the first three.
 constexpr const char* kMeshTopic = "/gear/mesh";
 constexpr const char* kPinionBearingTopic = "/gear/pinion_bearing/wrench";
 constexpr const char* kWheelBearingTopic = "/gear/wheel_bearing/wrench";
