@@ -1,5 +1,6 @@
 // gear_live_bench: the live node's costs (bench/live prints them).
 //   gear_live_bench core [--rate HZ] [--t-end T] [--repeat K] [--no-center-distance] [--spectrum HZ]
+//                        [--model torsional|bearings]
 //       LiveSimulation (the node's ROS-free core) at real_time_factor 0 with a sink that only
 //       counts: simulated seconds per CPU second of the stepping thread (getrusage), best of K.
 //       --spectrum: the spectrum topic on at HZ updates per simulated second (config/simulator.yaml's
@@ -74,6 +75,7 @@ int core(int argc, char** argv) {
   double rate = 1000.0, t_end = 2.0, spectrum = 0.0;
   int repeat = 3;
   bool center = true;
+  std::string model_name;  // empty: config/gear_pair.yaml's
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--rate" && i + 1 < argc) rate = std::atof(argv[++i]);
@@ -81,11 +83,13 @@ int core(int argc, char** argv) {
     else if (a == "--repeat" && i + 1 < argc) repeat = std::atoi(argv[++i]);
     else if (a == "--no-center-distance") center = false;
     else if (a == "--spectrum" && i + 1 < argc) spectrum = std::atof(argv[++i]);
+    else if (a == "--model" && i + 1 < argc) model_name = argv[++i];
     else { std::fprintf(stderr, "gear_live_bench core: unknown option %s\n", a.c_str()); return 2; }
   }
   const std::string dir = GEAR_DYNAMICS_CONFIG_DIR;
   YAML::Node root = gd::read_yaml_files({dir + "/gear_pair.yaml", dir + "/load.yaml", dir + "/run.yaml",
                                          dir + "/simulator.yaml"});
+  if (!model_name.empty()) root["gear_pair"]["model"] = model_name;
   const gd::ModelConfig model = gd::parse_config(root);
   gd::SimulatorSettings settings = gd::parse_simulator_settings(root, model.run.time_step);
   settings.real_time_factor = 0.0;
