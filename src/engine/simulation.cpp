@@ -18,9 +18,13 @@ class BearingForceSums {
   void observe(const Ensemble& e) {
     for (int i = 0; i < e.lanes(); ++i) {
       const BearingsOutputs o = bearings_outputs(e, i);
-      const Eigen::Array<double, kForces, 1> f(o.mesh_force, o.pinion_fx, o.pinion_fy, o.wheel_fx, o.wheel_fy);
-      sum_.col(i) += f;
-      square_.col(i) += f * f;
+      // Scalar sums: Eigen's packet path for a fixed 5-vector into a dynamic column trips GCC 12's
+      // -Warray-bounds under -march=native (AVX-512), an error with -Werror.
+      const double f[kForces] = {o.mesh_force, o.pinion_fx, o.pinion_fy, o.wheel_fx, o.wheel_fy};
+      for (int k = 0; k < kForces; ++k) {
+        sum_(k, i) += f[k];
+        square_(k, i) += f[k] * f[k];
+      }
     }
     ++count_;
   }
