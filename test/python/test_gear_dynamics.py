@@ -238,7 +238,7 @@ def test_lyapunov_exponents_sum_to_the_mean_trace():
     c = gear_dynamics.config()
     assert c["run"]["time_step"] == 2.5e-6
     # Liouville up to RK4's dissipation, at most omega_max^6 h^5 / 72 = 0.13 1/s at h = 2.5 us
-    # (test_dynamics_lyapunov.cpp derives the bound).
+    # (test/core/dynamics/test_lyapunov.cpp derives the bound).
     assert abs(sum(r["exponents"]) - r["trace"]) <= 0.13
     assert r["trace"] < 0 and r["exponents"][0] >= r["exponents"][1]
     assert len(r["running"]) == len(r["time"]) > 0

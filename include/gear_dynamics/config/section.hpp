@@ -2,7 +2,7 @@
 // unit, default and a one-line meaning. The table drives the section's reader (every problem
 // named with key, value and allowed range; unknown keys refused), gives its defaults (read from a
 // default-constructed settings struct, so the two cannot disagree), its YAML form, the generated
-// bad-input tests (test/core/bad_input.hpp) and the parameter tables of the docs (gear_run
+// bad-input tests (test/core/support/bad_input.hpp) and the parameter tables of the docs (gear_run
 // --print-parameters). Checks between keys stay explicit code after the table-driven pass.
 #pragma once
 

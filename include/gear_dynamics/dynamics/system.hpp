@@ -64,7 +64,7 @@ struct GearLaneSpec {
 };
 
 // Deterministic gear lanes, each with its own mesh schedule, stepped one by one with exactly the
-// arithmetic of Ensemble::step() for a lane with sigma = drift = 0 (test_dynamics_system checks bit
+// arithmetic of Ensemble::step() for a lane with sigma = drift = 0 (GearLanes.BitIdenticalToEnsemble checks bit
 // identity). For scans over what the Ensemble's lanes share: speed, mesh phase, damping.
 class GearLanes : public LaneSystem {
  public:

@@ -6,7 +6,7 @@
 //
 // It reports through a LiveSink (the state at every publish instant, run-info changes, log lines),
 // so the ROS node gear_simulator is a thin adapter (publishers, services, dynamic_reconfigure,
-// diagnostics), and it is unit-tested without a master (test/core/test_live_simulation.cpp) with an
+// diagnostics), and it is unit-tested without a master (test/core/live/test_live_simulation.cpp) with an
 // injected clock: iterate() does one step of the loop and says until when the loop would wait.
 #pragma once
 

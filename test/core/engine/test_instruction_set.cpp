@@ -3,7 +3,7 @@
 // the normals of one stream and of 8 lanes side by side, and 20 000 ensemble steps of 56 lanes, which
 // take the 4-, 2- and 1-packet paths and the located backlash crossings of the start-up rattle), and
 // the choice's names and refusals. The processes forced to each variant and the builds under other
-// CPUs are test/core/isa_check.py's.
+// CPUs are test/isa/isa_check.py's.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -13,7 +13,7 @@
 #include <tuple>
 #include <vector>
 
-#include "../../src/engine/dispatch.hpp"
+#include "../../../src/engine/dispatch.hpp"
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
 #include "gear_dynamics/engine/instruction_set.hpp"

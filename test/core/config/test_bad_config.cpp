@@ -7,7 +7,7 @@
 
 #include <algorithm>
 
-#include "bad_input.hpp"
+#include "support/bad_input.hpp"
 #include "gear_dynamics/analysis/batch_analysis.hpp"
 #include "gear_dynamics/config/aggregator_settings.hpp"
 #include "gear_dynamics/config/batch_settings.hpp"

@@ -1,9 +1,12 @@
-// The analytic checks of doc/model.md §7, run through the production integrator (Ensemble).
+// The analytic checks of doc/model.md §7, run through the production integrator (Ensemble), and
+// simulate()'s observers against the full path.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -405,4 +408,61 @@ TEST(Analytic, FullModelConvergesAtOrderFour) {
   std::printf("[ order    ] full model at 20 ms: D(h) = %.3e, %.3e, %.3e, %.3e m for h = 4, 2, 1, 0.5 us; "
               "%d switches in contact\n", diff[0], diff[1], diff[2], diff[3], switches_in_contact);
   for (std::size_t k = 0; k + 1 < diff.size(); ++k) EXPECT_GE(diff[k] / diff[k + 1], 10.0) << "halving " << k;
+}
+
+// simulate(): the window range at T and the snapshots equal a brute-force pass over the path.
+TEST(Simulate, ObserversAgreeWithTheFullPath) {
+  const gd::GearPair g = gd::derive(gd::GearInputs{});
+  std::vector<gd::LaneSpec> lanes(3);
+  for (int i = 0; i < 3; ++i) {
+    lanes[i].mu = 0.02 * i;
+    lanes[i].sigma = 5.0;
+    lanes[i].load_sd = 5.0;
+    lanes[i].realization = i;
+  }
+  gd::RunSettings run;
+  run.time_step = 1e-6;
+  run.duration = 0.02;
+  run.window = 0.005;
+  run.snapshot_times = {0.01, 0.017, 0.02};
+
+  gd::Ensemble a(g, 1e-6, {}, lanes, 11);
+  gd::Recorder rec;
+  rec.every = 250;
+  int records = 0;
+  Eigen::ArrayXd d_live;
+  rec.record = [&](const gd::Ensemble&, const Eigen::ArrayXd& d) {
+    ++records;
+    d_live = d;
+  };
+  const auto results = gd::simulate(a, run, rec);
+  EXPECT_EQ(records, 20000 / 250 + 1);
+
+  gd::Ensemble b(g, 1e-6, {}, lanes, 11);
+  Eigen::ArrayXd dmax = Eigen::ArrayXd::Constant(3, -1e300), dmin = -dmax, vmax = dmax, vmin = -dmax;
+  Eigen::ArrayXd last_out = Eigen::ArrayXd::Zero(3);
+  std::vector<Eigen::ArrayXd> snap;
+  const double b_lash = g.in.backlash;
+  for (std::int64_t n = 0; n <= 20000; ++n) {
+    if (n > 0) b.step();
+    if (n >= 15000) {
+      dmax = dmax.max(b.delta());
+      dmin = dmin.min(b.delta());
+      vmax = vmax.max(b.velocity());
+      vmin = vmin.min(b.velocity());
+    }
+    for (int i = 0; i < 3; ++i)
+      if (std::abs(b.delta()[i] - b_lash) > 0.1 * b_lash) last_out[i] = b.time();
+    if (n == 10000 || n == 17000 || n == 20000) snap.push_back(b.delta());
+  }
+  for (int i = 0; i < 3; ++i) {
+    const double d = std::sqrt((dmax[i] - dmin[i]) * (vmax[i] - vmin[i]));
+    EXPECT_EQ(results[i].center_distance, d);
+    EXPECT_EQ(d_live[i], d);  // the live d(T) over the trailing window is the same number
+    EXPECT_EQ(results[i].steady_state_time, last_out[i]);
+    EXPECT_EQ(results[i].reached_steady_state, std::llround(last_out[i] / 1e-6) < 20000);
+    ASSERT_EQ(results[i].snapshots.size(), 3u);
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(results[i].snapshots[k].delta, snap[k][i]);
+    EXPECT_DOUBLE_EQ(results[i].snapshots[1].time, 0.017);
+  }
 }
