@@ -11,25 +11,35 @@ mu or point: safety_over_time.png, first_passage.png, spectrum_band.png and poin
 Every number comes from the CSV files the aggregator wrote (paper units); this script only draws.
 --mu selects the friction coefficient of the series and joint-PDF figures (the paper's 0.04).
 --wait reads a line from stdin before reading the folder (end of input: exit 0, nothing drawn):
-gear_aggregator starts the script early, so that Python and matplotlib are loaded when its CSV
-files are written.
+gear_aggregator starts the script early, so that Python (and matplotlib, for a folder without
+figures yet) is loaded when its CSV files are written.
 Figures whose inputs are unchanged since they were drawn are kept (figures.sha256, see below).
 """
 import argparse
 import csv
 import glob
 import hashlib
+import importlib.metadata
 import math
 import os
 import sys
 import time
 
-import matplotlib
-import numpy as np
+# numpy and matplotlib, set by load_plotting(): about a second of CPU to import, spent only when a
+# figure is drawn (the main command run again keeps its figures).
+np = plt = MaxNLocator = None
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-from matplotlib.ticker import MaxNLocator  # noqa: E402
+
+def load_plotting():
+    global np, plt, MaxNLocator
+    if plt is not None:
+        return
+    import matplotlib
+    import numpy
+    matplotlib.use("Agg")
+    import matplotlib.pyplot
+    from matplotlib.ticker import MaxNLocator as locator
+    np, plt, MaxNLocator = numpy, matplotlib.pyplot, locator
 
 
 def read(folder, name):
@@ -422,6 +432,9 @@ def main():
     parser.add_argument("--mu", type=float, default=0.04, help="mu of Figs. 5-7 and 10 (default 0.04)")
     parser.add_argument("--wait", action="store_true", help="draw only after a line on stdin (end of input: exit 0)")
     args = parser.parse_args()
+    # A folder without figures gets them drawn: the imports then overlap the caller's work (--wait).
+    if not os.path.exists(os.path.join(args.folder, FIGURES_DIGEST)):
+        load_plotting()
     if args.wait:
         try:
             if not sys.stdin.readline():
@@ -438,6 +451,7 @@ def main():
     if figures_current(args.folder, inputs):
         print("plot_report: the figures in %s are those of these CSV files; not drawn again" % args.folder)
         return
+    load_plotting()
     started = time.time()
     points = os.path.join(args.folder, "points.csv")
     study = os.path.exists(points) and len(axis_columns(read(args.folder, "points.csv"))) > 1
@@ -480,7 +494,7 @@ def file_digest(path):
 
 def inputs_digest(folder, mu):
     h = hashlib.sha256()
-    h.update(("mu %r matplotlib %s\n" % (mu, matplotlib.__version__)).encode())
+    h.update(("mu %r matplotlib %s\n" % (mu, importlib.metadata.version("matplotlib"))).encode())
     h.update(file_digest(os.path.abspath(__file__)).encode())
     for path in sorted(glob.glob(os.path.join(folder, "*.csv"))):
         h.update(("%s %s\n" % (os.path.basename(path), file_digest(path))).encode())

@@ -47,7 +47,10 @@ trap 'rm -f "$log"' EXIT
 # roslaunch 1.15 exits 0 when a node fails, and the aggregator reads whatever complete bags the
 # folder holds: the command succeeds only if the batch node ended with exit code 0 (roslaunch says
 # "finished cleanly"), not after a refusal (exit 2), a stop (128 + n) or a crash.
-roslaunch -p "$port" gear_dynamics paper.launch output_dir:="$batch" report_folder:="$report" "$@" 2>&1 | tee "$log"
+# SETUPTOOLS_USE_DISTUTILS=stdlib: roslaunch imports rosclean, which imports distutils, and
+# setuptools' distutils hook answers that by importing all of setuptools (about 40 % of roslaunch's
+# start-up CPU); Python's own distutils serves rosclean the same.
+SETUPTOOLS_USE_DISTUTILS=stdlib roslaunch -p "$port" gear_dynamics paper.launch output_dir:="$batch" report_folder:="$report" "$@" 2>&1 | tee "$log"
 if ! grep -q '\[gear_monte_carlo-[0-9]*\] process has finished cleanly' "$log"; then
   echo "reproduce: gear_monte_carlo did not finish cleanly (see above); $report holds no report of this run" >&2
   rm -f "$report/report.md"
