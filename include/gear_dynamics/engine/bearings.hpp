@@ -13,6 +13,7 @@
 #include "gear_dynamics/engine/model_step.hpp"
 #include "gear_dynamics/engine/normal_stream.hpp"
 #include "gear_dynamics/engine/realization.hpp"
+#include "gear_dynamics/engine/rk4_kernel.hpp"
 #include "gear_dynamics/model/gear_pair.hpp"
 #include "gear_dynamics/model/mesh_schedule.hpp"
 
@@ -67,7 +68,40 @@ class BearingsModel {
     return dy;
   }
 
+  // derivative() on a packet of lanes (P an Eigen array, one lane per realization; y and dy hold
+  // kStates packets, component by component): each lane computes derivative()'s expressions in
+  // derivative()'s order, so its bits are the scalar path's (the ensemble's SIMD kernel,
+  // src/engine/dispatched/bearings_step.cpp). side is the lane's branch (-1, 0, +1), contact its
+  // magnitude; the mesh point's K, e and e_dot are the same for every lane.
+  template <class P>
+  struct LanePoint {
+    double stiffness;
+    P q, friction_force, load;
+    double error, error_rate;
+  };
+  template <class P>
+  void derivative(const P& side, const P& contact, const P* y, const LanePoint<P>& p, P* dy) const {
+    const P g = P(P((y[kDelta] + y[kPinionY]) - y[kWheelY]) - p.error) - side * b_;
+    const P rate = (y[kDeltaDot] + y[kPinionYDot]) - y[kWheelYDot];
+    // Apart (contact 0) the force is +0, as derivative()'s 0.0: a finite product with 0 is +-0, and
+    // adding +0 makes it +0; in contact F * 1 + 0 is F (F is never -0 there).
+    const P F = P(kernel::fused_mul_add(P(alpha_ * P(side * g)), P(rate - p.error_rate), P(p.stiffness * g)) *
+                  contact) + 0.0;
+    const P friction = p.friction_force * F;
+    dy[kDelta] = y[kDeltaDot];
+    dy[kDeltaDot] = kernel::fused_neg_mul_add(p.q, F, p.load);
+    dy[kPinionX] = y[kPinionXDot];
+    dy[kPinionXDot] = ((friction - k_ * y[kPinionX]) - cp_ * y[kPinionXDot]) * inv_mp_;
+    dy[kPinionY] = y[kPinionYDot];
+    dy[kPinionYDot] = ((-F - k_ * y[kPinionY]) - cp_ * y[kPinionYDot]) * inv_mp_;
+    dy[kWheelX] = y[kWheelXDot];
+    dy[kWheelXDot] = ((-friction - k_ * y[kWheelX]) - cg_ * y[kWheelXDot]) * inv_mg_;
+    dy[kWheelY] = y[kWheelYDot];
+    dy[kWheelYDot] = ((F - k_ * y[kWheelY]) - cg_ * y[kWheelYDot]) * inv_mg_;
+  }
+
   const BearingParameters& bearings() const { return p_; }
+  double backlash() const { return b_; }
 
  private:
   BearingParameters p_;
