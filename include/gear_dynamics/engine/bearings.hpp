@@ -2,7 +2,8 @@
 // freedom model plus the translations of pinion and wheel on isotropic bearings, x across the line
 // of action (LOA) and y along it. The mesh deflection is delta_m = delta_t + y_p - y_g; the friction
 // force of the pairs in contact acts along x, on the two bodies in opposite senses. A model of the
-// engine's seam (model_step.hpp): the stepping is the generic located RK4, in src/engine/bearings.cpp.
+// engine's seam (model_step.hpp): the stepping is the generic located RK4, in src/engine/bearings.cpp;
+// Ensemble's lanes take the same steps in SIMD (src/engine/dispatched/bearings_step.cpp).
 #pragma once
 
 #include <Eigen/Core>
@@ -125,7 +126,7 @@ struct BearingsOutputs {
 
 // Grid step n of one realization of the bearings model from y, with friction coefficient mu and the
 // load going from load0 to load1: the located segments of mesh.plan(n) (model_step::located_segment).
-// The one stepping path of BearingsRealization and of Ensemble's bearings lanes. Returns the
+// BearingsRealization's step; Ensemble's SIMD lanes give its bits. Returns the
 // crossings of delta_m through +-b (+ e) located.
 int bearings_step(const BearingsModel& model, const GearPair& gear, const MeshSchedule& mesh, double time_step,
                   double mu, std::int64_t n, double load0, double load1, BearingsModel::State& y);
