@@ -1,8 +1,6 @@
-// The bearings model's stepping (engine/bearings.hpp): its own translation unit, so that it can be
-// compiled once per instruction set beside the torsional kernel.
+// The bearings model (engine/bearings.hpp): its parameters, friction share, one-lane step and
+// outputs. The ensemble's SIMD lanes are src/engine/dispatched/bearings_step.cpp.
 #include "gear_dynamics/engine/bearings.hpp"
-
-#include "gear_dynamics/model/friction_law.hpp"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>

@@ -12,6 +12,10 @@
 #include "gear_dynamics/engine/instruction_set.hpp"
 #include "gear_dynamics/model/mesh_schedule.hpp"
 
+namespace gear_dynamics {
+class BearingsModel;
+}
+
 namespace gear_dynamics::dispatch {
 
 // Grid step n of an Ensemble's padded lanes (Ensemble::step's arrays, lanes a multiple of the
@@ -33,6 +37,21 @@ struct RealizationStep {
   double *delta, *velocity, *load;
 };
 
+// Grid step n of an Ensemble's padded lanes of the bearings model (Ensemble::step_bearings): the
+// state component-major (component k of lane i at state[k * stride + i]), delta and velocity the
+// mesh deflection and its rate written after the step.
+struct BearingsEnsembleStep {
+  const BearingsModel* model;
+  const GearPair* gear;
+  const MeshSchedule* mesh;
+  std::int64_t n;
+  double h, sqrt_h;
+  double* state;
+  std::ptrdiff_t stride;
+  double *delta, *velocity, *load;
+  const double *mu, *sigma, *drift, *z;
+  std::ptrdiff_t lanes;
+};
 // A NormalStream's key and counter word, and a NormalLanes' per lane.
 struct StreamKey {
   std::uint32_t key0, key1, seed_high;
@@ -47,6 +66,8 @@ struct Kernels {
   // Steps the lanes; false when the state is no longer finite (the caller finds the lane).
   bool (*ensemble_step)(const EnsembleStep&);
   void (*realization_step)(const RealizationStep&);
+  // The bearings model's lanes; false when the state is no longer finite.
+  bool (*bearings_ensemble_step)(const BearingsEnsembleStep&);
   void (*philox)(const StreamKey&, std::uint64_t first_pair, std::uint64_t* w0, std::uint64_t* w1);
   void (*normal_block)(const StreamKey&, std::uint64_t first_pair, double* out);
   void (*normal_lanes_block)(const LaneKeys&, std::uint64_t first_pair, double* out, std::ptrdiff_t stride);

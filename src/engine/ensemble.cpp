@@ -6,7 +6,6 @@
 #include <sstream>
 
 #include "gear_dynamics/engine/bearings.hpp"
-#include "gear_dynamics/engine/rk4_kernel.hpp"
 
 namespace gear_dynamics {
 
@@ -49,7 +48,7 @@ Ensemble::Ensemble(const GearPair& gear, double time_step, const InitialState& i
   sigma_.setZero(p);
   drift_.setZero(p);
   normals_.setZero(p, kNormalChunk);
-  if (gear.in.model == GearModel::kBearings) model_state_.setZero(BearingsModel::kStates, static_cast<Eigen::Index>(spec_.size()));
+  if (gear.in.model == GearModel::kBearings) model_state_.setZero(BearingsModel::kStates, p);
   reset();
 }
 
@@ -68,8 +67,8 @@ void Ensemble::reset() {
   }
   if (model_state_.size() > 0) {  // at rest on the bearings: delta_m = delta_t
     model_state_.setZero();
-    model_state_.row(BearingsModel::kDelta).setConstant(initial_.deflection);
-    model_state_.row(BearingsModel::kDeltaDot).setConstant(initial_.velocity);
+    model_state_.row(BearingsModel::kDelta).head(lanes()).setConstant(initial_.deflection);
+    model_state_.row(BearingsModel::kDeltaDot).head(lanes()).setConstant(initial_.velocity);
   }
 }
 
@@ -135,21 +134,32 @@ void Ensemble::step() {
 }
 
 void Ensemble::step_bearings(Eigen::Index column) {
-  // Lane by lane, each one BearingsRealization's arithmetic (the same load step and bearings_step), so
-  // that a realization's bits depend neither on its block nor on its lane.
+  // The lanes in SIMD packets, each lane BearingsRealization's arithmetic (the same load step and
+  // bearings_step's bits), so that a realization's bits depend neither on its block nor on its lane.
   const BearingsModel model(gear_);
-  const double sqrt_h = std::sqrt(h_);
-  for (int i = 0; i < lanes(); ++i) {
-    BearingsModel::State y = model_state_.col(i);
-    const double load1 = kernel::load_next<double>(load_[i], drift_[i], sigma_[i], normals_(i, column), h_, sqrt_h);
-    bearings_step(model, gear_, mesh_, h_, mu_[i], n_, load_[i], load1, y);
-    model_state_.col(i) = y;
-    delta_[i] = model.deflection(y);
-    velocity_[i] = model.deflection_rate(y);
-    load_[i] = load1;
-    if (!y.allFinite()) throw bearings_divergence(spec_[i].realization, i, delta_[i], static_cast<double>(n_ + 1) * h_);
-  }
+  const dispatch::BearingsEnsembleStep step{&model,
+                                             &gear_,
+                                             &mesh_,
+                                             n_,
+                                             h_,
+                                             std::sqrt(h_),
+                                             model_state_.data(),
+                                             model_state_.cols(),
+                                             delta_.data(),
+                                             velocity_.data(),
+                                             load_.data(),
+                                             mu_.data(),
+                                             sigma_.data(),
+                                             drift_.data(),
+                                             &normals_(0, column),
+                                             delta_.size()};
+  const bool finite = dispatch::kernels().bearings_ensemble_step(step);
   ++n_;
+  if (finite) return;
+  for (int i = 0; i < lanes(); ++i) {
+    if (!model_state_.col(i).allFinite())
+      throw bearings_divergence(spec_[i].realization, i, delta_[i], time());
+  }
 }
 
 void Ensemble::report_divergence() const {

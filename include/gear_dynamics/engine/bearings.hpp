@@ -2,7 +2,8 @@
 // freedom model plus the translations of pinion and wheel on isotropic bearings, x across the line
 // of action (LOA) and y along it. The mesh deflection is delta_m = delta_t + y_p - y_g; the friction
 // force of the pairs in contact acts along x, on the two bodies in opposite senses. A model of the
-// engine's seam (model_step.hpp): the stepping is the generic located RK4, in src/engine/bearings.cpp.
+// engine's seam (model_step.hpp): the stepping is the generic located RK4, in src/engine/bearings.cpp;
+// Ensemble's lanes take the same steps in SIMD (src/engine/dispatched/bearings_step.cpp).
 #pragma once
 
 #include <Eigen/Core>
@@ -13,6 +14,7 @@
 #include "gear_dynamics/engine/model_step.hpp"
 #include "gear_dynamics/engine/normal_stream.hpp"
 #include "gear_dynamics/engine/realization.hpp"
+#include "gear_dynamics/engine/rk4_kernel.hpp"
 #include "gear_dynamics/model/gear_pair.hpp"
 #include "gear_dynamics/model/mesh_schedule.hpp"
 
@@ -67,7 +69,40 @@ class BearingsModel {
     return dy;
   }
 
+  // derivative() on a packet of lanes (P an Eigen array, one lane per realization; y and dy hold
+  // kStates packets, component by component): each lane computes derivative()'s expressions in
+  // derivative()'s order, so its bits are the scalar path's (the ensemble's SIMD kernel,
+  // src/engine/dispatched/bearings_step.cpp). side is the lane's branch (-1, 0, +1), contact its
+  // magnitude; the mesh point's K, e and e_dot are the same for every lane.
+  template <class P>
+  struct LanePoint {
+    double stiffness;
+    P q, friction_force, load;
+    double error, error_rate;
+  };
+  template <class P>
+  void derivative(const P& side, const P& contact, const P* y, const LanePoint<P>& p, P* dy) const {
+    const P g = P(P((y[kDelta] + y[kPinionY]) - y[kWheelY]) - p.error) - side * b_;
+    const P rate = (y[kDeltaDot] + y[kPinionYDot]) - y[kWheelYDot];
+    // Apart (contact 0) the force is +0, as derivative()'s 0.0: a finite product with 0 is +-0, and
+    // adding +0 makes it +0; in contact F * 1 + 0 is F (F is never -0 there).
+    const P F = P(kernel::fused_mul_add(P(alpha_ * P(side * g)), P(rate - p.error_rate), P(p.stiffness * g)) *
+                  contact) + 0.0;
+    const P friction = p.friction_force * F;
+    dy[kDelta] = y[kDeltaDot];
+    dy[kDeltaDot] = kernel::fused_neg_mul_add(p.q, F, p.load);
+    dy[kPinionX] = y[kPinionXDot];
+    dy[kPinionXDot] = ((friction - k_ * y[kPinionX]) - cp_ * y[kPinionXDot]) * inv_mp_;
+    dy[kPinionY] = y[kPinionYDot];
+    dy[kPinionYDot] = ((-F - k_ * y[kPinionY]) - cp_ * y[kPinionYDot]) * inv_mp_;
+    dy[kWheelX] = y[kWheelXDot];
+    dy[kWheelXDot] = ((-friction - k_ * y[kWheelX]) - cg_ * y[kWheelXDot]) * inv_mg_;
+    dy[kWheelY] = y[kWheelYDot];
+    dy[kWheelYDot] = ((F - k_ * y[kWheelY]) - cg_ * y[kWheelYDot]) * inv_mg_;
+  }
+
   const BearingParameters& bearings() const { return p_; }
+  double backlash() const { return b_; }
 
  private:
   BearingParameters p_;
@@ -91,7 +126,7 @@ struct BearingsOutputs {
 
 // Grid step n of one realization of the bearings model from y, with friction coefficient mu and the
 // load going from load0 to load1: the located segments of mesh.plan(n) (model_step::located_segment).
-// The one stepping path of BearingsRealization and of Ensemble's bearings lanes. Returns the
+// BearingsRealization's step; Ensemble's SIMD lanes give its bits. Returns the
 // crossings of delta_m through +-b (+ e) located.
 int bearings_step(const BearingsModel& model, const GearPair& gear, const MeshSchedule& mesh, double time_step,
                   double mu, std::int64_t n, double load0, double load1, BearingsModel::State& y);

@@ -1,8 +1,8 @@
 // The gear SDE (doc/model.md §2) for a block of realizations stepped together: structure of arrays,
 // one SIMD lane per realization, RK4 with the stiffness switches split out (doc/model.md §5).
-// gear_pair.model = bearings runs here too, one lane after the other through the model seam
-// (bearings_step, engine/bearings.hpp), its delta and delta_dot the mesh deflection delta_m and its
-// rate: the observers, the recorder and the batch see it as they see the torsional model.
+// gear_pair.model = bearings runs here too, in SIMD packets of lanes of its own kernel
+// (src/engine/dispatched/bearings_step.cpp, bit for bit bearings_step, engine/bearings.hpp), its
+// delta and delta_dot the mesh deflection delta_m and its rate: the observers, the recorder and the batch see it as they see the torsional model.
 // The CLI and the Monte Carlo batch run this class; the live node steps its one realization with
 // Realization (engine/realization.hpp), the same kernel (engine/rk4_kernel.hpp) on one lane. Every
 // lane's arithmetic is independent of the other lanes (the build uses -ffp-contract=off), so a
@@ -86,7 +86,7 @@ class Ensemble {
   const Eigen::ArrayXd& padded_velocity() const { return velocity_; }
   // The whole state of each lane of a model with more than (delta, delta_dot), one column per lane
   // (BearingsModel::State; bearings_outputs(ensemble, lane) reads it); empty for the torsional model.
-  const Eigen::ArrayXXd& model_state() const { return model_state_; }
+  auto model_state() const { return model_state_.leftCols(model_state_.size() > 0 ? lanes() : 0); }
 
   // Run-time changes; they take effect at the next step boundary.
   void set_mu(int lane, double mu);
@@ -120,7 +120,8 @@ class Ensemble {
 
   // Padded to a multiple of kPacket.
   Eigen::ArrayXd delta_, velocity_, load_, mu_, sigma_, drift_;
-  Eigen::ArrayXXd model_state_;  // model_state()
+  // model_state(), padded; row-major: each component's lanes side by side, as the SIMD kernel reads them.
+  Eigen::Array<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> model_state_;
   // Padded lanes x kNormalChunk: column j holds normal normals_first_ + j of each lane's stream.
   static_assert(Ensemble::kPacket == NormalLanes::kLanes);
   // Chunks start at multiples of kNormalChunk, whole blocks of the stream's generator.

@@ -14,7 +14,8 @@
 //   double deflection_rate(const State&) const;   // its time derivative (the same linear map of dy/dt)
 //   State derivative(int branch, const State&, const MeshPoint&) const;  // dy/dt on `branch`,
 //                                                 // smoothly continued past its boundaries
-// The torsional model keeps its own SIMD kernel (rk4_kernel.hpp); this path is scalar.
+// This path is scalar; each model's SIMD kernel for the ensemble's lanes (rk4_kernel.hpp,
+// src/engine/dispatched/bearings_step.cpp) calls it for the lanes that may reach a boundary.
 #pragma once
 
 #include <Eigen/Core>

@@ -4,7 +4,7 @@
 namespace gear_dynamics::GD_ISA_NAMESPACE {
 namespace {
 
-constexpr dispatch::Kernels kKernels{InstructionSet::GD_ISA, ensemble_step, realization_step, philox, normal_block, normal_lanes_block};
+constexpr dispatch::Kernels kKernels{InstructionSet::GD_ISA, ensemble_step, realization_step, bearings_ensemble_step, philox, normal_block, normal_lanes_block};
 
 }  // namespace
 }  // namespace gear_dynamics::GD_ISA_NAMESPACE

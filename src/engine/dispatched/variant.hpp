@@ -16,6 +16,7 @@ namespace gear_dynamics::GD_ISA_NAMESPACE {
 
 bool ensemble_step(const dispatch::EnsembleStep& step);
 void realization_step(const dispatch::RealizationStep& step);
+bool bearings_ensemble_step(const dispatch::BearingsEnsembleStep& step);
 void philox(const dispatch::StreamKey& key, std::uint64_t first_pair, std::uint64_t* w0, std::uint64_t* w1);
 void normal_block(const dispatch::StreamKey& key, std::uint64_t first_pair, double* out);
 void normal_lanes_block(const dispatch::LaneKeys& keys, std::uint64_t first_pair, double* out, std::ptrdiff_t stride);
