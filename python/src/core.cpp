@@ -99,7 +99,7 @@ py::dict simulate(const std::vector<std::string>& files, const std::vector<std::
   std::vector<double> t, delta, delta_dot, phi, dist;  // sample-major: [sample][lane]
   // The bearings model's further outputs (gear_run's extra CSV columns), in the same layout.
   const bool bearings = pc.gear.model == gd::GearModel::kBearings;
-  std::vector<double> delta_t, mesh_force, pinion_fx, pinion_fy, wheel_fx, wheel_fy;
+  std::vector<std::vector<double>> outputs(bearings ? std::size(gd::kBearingsOutputs) : 0);  // kBearingsOutputs'
   gd::Ensemble ensemble(gd::derive(pc.gear), pc.run.time_step, pc.initial, lanes, pc.seed);
   gd::Recorder recorder;
   recorder.every = check_every;
@@ -113,12 +113,7 @@ py::dict simulate(const std::vector<std::string>& files, const std::vector<std::
         dist.push_back(d[i]);
         if (bearings) {
           const gd::BearingsOutputs o = gd::bearings_outputs(e, i);
-          delta_t.push_back(e.model_state()(gd::BearingsModel::kDelta, i));
-          mesh_force.push_back(o.mesh_force);
-          pinion_fx.push_back(o.pinion_fx);
-          pinion_fy.push_back(o.pinion_fy);
-          wheel_fx.push_back(o.wheel_fx);
-          wheel_fy.push_back(o.wheel_fy);
+          for (std::size_t k = 0; k < outputs.size(); ++k) outputs[k].push_back(o.*gd::kBearingsOutputs[k].value);
         }
       }
     }
@@ -158,14 +153,7 @@ py::dict simulate(const std::vector<std::string>& files, const std::vector<std::
   out["delta_dot"] = per_run(delta_dot);
   out["phi"] = per_run(phi);
   out["center_distance"] = per_run(dist);
-  if (bearings) {
-    out["delta_t"] = per_run(delta_t);
-    out["mesh_force"] = per_run(mesh_force);
-    out["pinion_fx"] = per_run(pinion_fx);
-    out["pinion_fy"] = per_run(pinion_fy);
-    out["wheel_fx"] = per_run(wheel_fx);
-    out["wheel_fy"] = per_run(wheel_fy);
-  }
+  for (std::size_t k = 0; k < outputs.size(); ++k) out[gd::kBearingsOutputs[k].name] = per_run(outputs[k]);
   auto column = [&](auto get) {
     py::array_t<double> a(nr);
     auto m = a.mutable_unchecked<1>();

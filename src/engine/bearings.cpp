@@ -129,11 +129,25 @@ BearingsOutputs bearings_outputs(const BearingsModel& model, const GearPair& gea
   using M = BearingsModel;
   return {dm,
           model.deflection_rate(y),
+          y[M::kDelta],
           model.mesh_force(model_step::branch_of(dm, e, gear.in.backlash), y, p),
           b.stiffness * y[M::kPinionX] + b.pinion_damping * y[M::kPinionXDot],
           b.stiffness * y[M::kPinionY] + b.pinion_damping * y[M::kPinionYDot],
           b.stiffness * y[M::kWheelX] + b.wheel_damping * y[M::kWheelXDot],
           b.stiffness * y[M::kWheelY] + b.wheel_damping * y[M::kWheelYDot]};
+}
+
+std::vector<BearingsOutputSpec> bearing_force_outputs() {
+  std::vector<BearingsOutputSpec> forces;
+  for (const BearingsOutputSpec& o : kBearingsOutputs)
+    if (o.window) forces.push_back(o);
+  return forces;
+}
+
+const BearingsOutputSpec* find_bearings_output(const std::string& name) {
+  for (const BearingsOutputSpec& o : kBearingsOutputs)
+    if (name == o.name) return &o;
+  return nullptr;
 }
 
 BearingsOutputs bearings_outputs(const Ensemble& ensemble, int lane) {

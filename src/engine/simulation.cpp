@@ -14,30 +14,31 @@ namespace {
 // Sums of the bearings model's forces and of their squares over the window, per lane.
 class BearingForceSums {
  public:
-  explicit BearingForceSums(int lanes) : sum_(Eigen::ArrayXXd::Zero(kForces, lanes)), square_(sum_) {}
+  explicit BearingForceSums(int lanes)
+      : forces_(bearing_force_outputs()),
+        sum_(Eigen::ArrayXXd::Zero(static_cast<Eigen::Index>(forces_.size()), lanes)),
+        square_(sum_) {}
   void observe(const Ensemble& e) {
     for (int i = 0; i < e.lanes(); ++i) {
       const BearingsOutputs o = bearings_outputs(e, i);
-      // Scalar sums: Eigen's packet path for a fixed 5-vector into a dynamic column trips GCC 12's
-      // -Warray-bounds under -march=native (AVX-512), an error with -Werror.
-      const double f[kForces] = {o.mesh_force, o.pinion_fx, o.pinion_fy, o.wheel_fx, o.wheel_fy};
-      for (int k = 0; k < kForces; ++k) {
-        sum_(k, i) += f[k];
-        square_(k, i) += f[k] * f[k];
+      for (std::size_t k = 0; k < forces_.size(); ++k) {
+        const double f = o.*forces_[k].value;
+        sum_(k, i) += f;
+        square_(k, i) += f * f;
       }
     }
     ++count_;
   }
   BearingForces result(int lane) const {
-    const auto stats = [&](int k) {
-      const double n = static_cast<double>(count_);
-      return ForceStatistics{sum_(k, lane) / n, std::sqrt(square_(k, lane) / n)};
-    };
-    return {stats(0), stats(1), stats(2), stats(3), stats(4)};
+    const double n = static_cast<double>(count_);
+    BearingForces r;
+    for (std::size_t k = 0; k < forces_.size(); ++k)
+      r.*forces_[k].window = ForceStatistics{sum_(k, lane) / n, std::sqrt(square_(k, lane) / n)};
+    return r;
   }
 
  private:
-  static constexpr int kForces = 5;
+  std::vector<BearingsOutputSpec> forces_;
   Eigen::ArrayXXd sum_, square_;
   std::int64_t count_ = 0;
 };

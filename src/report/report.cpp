@@ -409,18 +409,17 @@ std::string write_bearing_forces(const fs::path& dir, const BatchInputs& in, con
                                  std::vector<std::string>& written) {
   const bool any = std::any_of(in.runs.begin(), in.runs.end(), [](const RunRecord& r) { return r.bearings.has_value(); });
   if (!any) return "";
-  const char* names[] = {"mesh_force", "pinion_fx", "pinion_fy", "wheel_fx", "wheel_fy"};
-  const auto forces = [](const BearingForces& f) {
-    return std::array<ForceStatistics, 5>{f.mesh_force, f.pinion_fx, f.pinion_fy, f.wheel_fx, f.wheel_fy};
-  };
+  const std::vector<BearingsOutputSpec> forces = bearing_force_outputs();
   const std::string kh = a.key_header.empty() ? "mu" : a.key_header;
   const auto key = [&](const RunRecord& r) { return r.point < a.keys.size() ? a.keys[r.point] : general(r.mu); };
   {
     ReportFile c(dir / "bearing_forces.csv", written, "name,kind," + kh + ",force,mean[N],rms[N]");
     for (const RunRecord& r : in.runs) {
       if (!r.bearings) continue;
-      const auto f = forces(*r.bearings);
-      for (std::size_t k = 0; k < f.size(); ++k) c.row(r.name, to_string(r.kind), key(r), names[k], f[k].mean, f[k].rms);
+      for (const BearingsOutputSpec& o : forces) {
+        const ForceStatistics& f = (*r.bearings).*o.window;
+        c.row(r.name, to_string(r.kind), key(r), o.name, f.mean, f.rms);
+      }
     }
   }
   // Per group (mu or study point, in the order met) and force: the runs' mean of the window means,
@@ -441,15 +440,15 @@ std::string write_bearing_forces(const fs::path& dir, const BatchInputs& in, con
   for (std::size_t point : order) {
     const std::vector<const RunRecord*>& runs = groups[point];
     const double n = static_cast<double>(runs.size());
-    for (std::size_t k = 0; k < 5; ++k) {
+    for (const BearingsOutputSpec& o : forces) {
       double mean = 0, rms = 0, rms2 = 0, lo = INFINITY, hi = -INFINITY;
       for (const RunRecord* r : runs) {
-        const ForceStatistics f = forces(*r->bearings)[k];
+        const ForceStatistics f = (*r->bearings).*o.window;
         mean += f.mean / n, rms += f.rms / n, rms2 += f.rms * f.rms;
         lo = std::min(lo, f.rms), hi = std::max(hi, f.rms);
       }
       const double sd = runs.size() > 1 ? std::sqrt(std::max(0.0, (rms2 - n * rms * rms) / (n - 1))) : 0.0;
-      md << "| " << key(*runs.front()) << " | " << runs.size() << " | " << names[k] << " | " << general(mean) << " | "
+      md << "| " << key(*runs.front()) << " | " << runs.size() << " | " << o.name << " | " << general(mean) << " | "
          << general(rms) << " ± " << general(sd) << " [" << general(lo) << ", " << general(hi) << "] |\n";
     }
   }

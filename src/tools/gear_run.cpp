@@ -122,11 +122,12 @@ void run_bearings(const gd::ModelConfig& pc, const std::vector<gd::LaneSpec>& la
         for (int k = 0; k < 5; ++k) sum[k] += f[k] * f[k];
         count += 1.0;
       }
-      if (every > 0 && n % every == 0)
+      if (every > 0 && n % every == 0) {
         *csv << names[i] << ',' << gd::grid_time(n, run.time_step) << ',' << o.delta_m << ',' << o.delta_m_dot << ','
-             << r.load() << ',' << range.center_distance(0) << ',' << r.state()[gd::BearingsModel::kDelta] << ','
-             << o.mesh_force << ',' << o.pinion_fx << ',' << o.pinion_fy << ',' << o.wheel_fx << ',' << o.wheel_fy
-             << '\n';
+             << r.load() << ',' << range.center_distance(0);
+        for (const gd::BearingsOutputSpec& s : gd::kBearingsOutputs) *csv << ',' << o.*s.value;
+        *csv << '\n';
+      }
     };
     observe();
     while (r.step_index() < total) {
@@ -199,9 +200,10 @@ int main(int argc, char** argv) try {
       csv = &file;
     }
     csv->precision(17);
-    *csv << "run,t,delta,delta_dot,phi,center_distance"
-         << (cfg.gear.model == gd::GearModel::kBearings ? ",delta_t,mesh_force,pinion_fx,pinion_fy,wheel_fx,wheel_fy" : "")
-         << '\n';
+    *csv << "run,t,delta,delta_dot,phi,center_distance";
+    if (cfg.gear.model == gd::GearModel::kBearings)
+      for (const gd::BearingsOutputSpec& s : gd::kBearingsOutputs) *csv << ',' << s.name;
+    *csv << '\n';
   }
   for (const gd::StudyPoint& point : study.points) {
     const gd::ModelConfig& pc = point.config;

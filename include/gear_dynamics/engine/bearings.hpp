@@ -9,6 +9,8 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "gear_dynamics/engine/ensemble.hpp"
 #include "gear_dynamics/engine/model_step.hpp"
@@ -118,11 +120,45 @@ double friction_share(const GearPair& gear, const MeshTable* table, double a);
 // The outputs of one state (doc/model.md §11), SI.
 struct BearingsOutputs {
   double delta_m, delta_m_dot;  // mesh deflection [m] and its rate [m/s]
+  double delta_t;               // the torsional coordinate [m]
   double mesh_force;            // F_m [N]
   // What each body's bearing carries: k_b u + c u_dot along x (across the LOA) and y (along it),
   // the force the body exerts on the housing [N].
   double pinion_fx, pinion_fy, wheel_fx, wheel_fy;
 };
+
+// The mean and the root mean square of a force over the analysis window [T - W, T] [N].
+struct ForceStatistics {
+  double mean = 0.0, rms = 0.0;
+};
+
+// The bearings model's forces over the window (doc/model.md §11's outputs): the mesh force and what
+// each body puts on its bearing across the line of action (x) and along it (y).
+struct BearingForces {
+  ForceStatistics mesh_force, pinion_fx, pinion_fy, wheel_fx, wheel_fy;
+};
+
+// One output of the bearings model beyond delta = delta_m and delta_dot = delta_m_dot, which every
+// model has. The one list gear_run's CSV columns, gear_analyze --output, the report's force rows
+// and the Python dict follow (doc/architecture.md, "Adding an output").
+struct BearingsOutputSpec {
+  const char* name;                        // the CSV column, the dict key, the --output value
+  const char* unit;                        // SI
+  double BearingsOutputs::*value;
+  ForceStatistics BearingForces::*window;  // a force's window statistics (RunResult); null otherwise
+};
+inline constexpr BearingsOutputSpec kBearingsOutputs[] = {
+    {"delta_t", "m", &BearingsOutputs::delta_t, nullptr},
+    {"mesh_force", "N", &BearingsOutputs::mesh_force, &BearingForces::mesh_force},
+    {"pinion_fx", "N", &BearingsOutputs::pinion_fx, &BearingForces::pinion_fx},
+    {"pinion_fy", "N", &BearingsOutputs::pinion_fy, &BearingForces::pinion_fy},
+    {"wheel_fx", "N", &BearingsOutputs::wheel_fx, &BearingForces::wheel_fx},
+    {"wheel_fy", "N", &BearingsOutputs::wheel_fy, &BearingForces::wheel_fy},
+};
+// The entries of kBearingsOutputs with window statistics (the forces), in the table's order.
+std::vector<BearingsOutputSpec> bearing_force_outputs();
+// The entry named `name`, or null.
+const BearingsOutputSpec* find_bearings_output(const std::string& name);
 
 // Grid step n of one realization of the bearings model from y, with friction coefficient mu and the
 // load going from load0 to load1: the located segments of mesh.plan(n) (model_step::located_segment).

@@ -7,6 +7,7 @@
 #include <optional>
 #include <vector>
 
+#include "gear_dynamics/engine/bearings.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
 #include "gear_dynamics/engine/observers.hpp"
 
@@ -26,17 +27,6 @@ struct RunSettings {
 
 struct SnapshotState {
   double time, delta, delta_dot, load;  // [s], [m], [m/s], [m/s^2]
-};
-
-// The mean and the root mean square of a force over the analysis window [T - W, T] [N].
-struct ForceStatistics {
-  double mean = 0.0, rms = 0.0;
-};
-
-// The bearings model's forces over the window (doc/model.md §11's outputs): the mesh force and what
-// each body puts on its bearing across the line of action (x) and along it (y).
-struct BearingForces {
-  ForceStatistics mesh_force, pinion_fx, pinion_fy, wheel_fx, wheel_fy;
 };
 
 // What a run leaves behind (SI).
