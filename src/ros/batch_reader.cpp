@@ -558,7 +558,7 @@ void set_points(BatchInputs& in, Listing& listing) {
   Listed& listed = listing.listed;
   if (manifests.front().study) {
     for (std::size_t a = 0; a < manifests.front().axes.size(); ++a) {
-      SweepAxis axis{manifests.front().axes[a], {}};
+      SweepAxis axis{manifests.front().axes[a], {}, {}};
       for (const auto& p : manifests.front().points)
         if (std::find(axis.values.begin(), axis.values.end(), p[a]) == axis.values.end()) axis.values.push_back(p[a]);
       in.axes.push_back(axis);
@@ -567,7 +567,7 @@ void set_points(BatchInputs& in, Listing& listing) {
   } else {  // format 1, a mu sweep: one point per mu, ascending (as its report)
     std::set<double> mus;
     for (const auto& [name, entry] : listed) mus.insert(entry.first.mu);
-    in.axes.push_back({kFrictionKey, std::vector<double>(mus.begin(), mus.end())});
+    in.axes.push_back({kFrictionKey, std::vector<double>(mus.begin(), mus.end()), {}});
     for (double mu : mus) in.points.push_back({mu});
     for (auto& [name, entry] : listed)
       entry.first.point = static_cast<std::size_t>(std::distance(mus.begin(), mus.find(entry.first.mu)));
