@@ -370,23 +370,39 @@ def axis_columns(points):
     return keys[1:keys.index("R")]
 
 
+def axis_values(points, a):
+    """The values of axis `a`: numbers ascending, or the labels of a text axis (friction_model, ...)
+    in the study's order; and a function from a row to that value."""
+    try:
+        values = sorted(set(float(p[a]) for p in points))
+        return values, lambda p: float(p[a])
+    except ValueError:
+        return list(dict.fromkeys(p[a] for p in points)), lambda p: p[a]
+
+
+def value_text(v):
+    return "%g" % v if isinstance(v, float) else v
+
+
 def study_figures(folder, out):
     """A figure per axis with more than one value (lines for the other axes' values), and for a
     2-D grid heat maps of median d and of P(delta(T) in and delta_dot(T) in). From points.csv."""
     points = read(folder, "points.csv")
     axes = axis_columns(points)
-    values = {a: sorted(set(float(p[a]) for p in points)) for a in axes}
+    values, value = {}, {}
+    for a in axes:
+        values[a], value[a] = axis_values(points, a)
     varied = [a for a in axes if len(values[a]) > 1]
     for a in varied:
         others = [b for b in varied if b != a]
         lines = {}
         for p in points:
-            lines.setdefault(tuple(float(p[b]) for b in others), []).append(p)
+            lines.setdefault(tuple(value[b](p) for b in others), []).append(p)
         fig, (ax_d, ax_p, ax_b) = plt.subplots(1, 3, figsize=(13, 3.8))
         for key, rows in sorted(lines.items()):
-            rows.sort(key=lambda p: float(p[a]))
-            x = col(rows, a)
-            label = ", ".join("%s = %g" % (b, v) for b, v in zip(others, key)) or None
+            rows.sort(key=lambda p: values[a].index(value[a](p)))
+            x = [values[a].index(value[a](p)) for p in rows] if isinstance(values[a][0], str) else col(rows, a)
+            label = ", ".join("%s = %s" % (b, value_text(v)) for b, v in zip(others, key)) or None
             med = col(rows, "d_median")
             lo = [m - l for m, l in zip(med, col(rows, "d_median_low"))]
             hi = [h - m for m, h in zip(med, col(rows, "d_median_high"))]
@@ -400,6 +416,8 @@ def study_figures(folder, out):
         ax_p.set_ylabel("P(d > phase-ensemble median) [%]")
         ax_b.set_ylabel(r"P($\delta$(T) $\in$ I $\wedge$ $\dot{\delta}$(T) $\in$ I) [%]")
         for axis in (ax_d, ax_p, ax_b):
+            if isinstance(values[a][0], str):  # a text axis: one tick per label
+                axis.set_xticks(range(len(values[a])), values[a])
             axis.set_xlabel(a)
             axis.grid(alpha=0.3)
         if others:
@@ -412,11 +430,11 @@ def study_figures(folder, out):
                                       ("both_in", r"P($\delta$ $\in$ I $\wedge$ $\dot{\delta}$ $\in$ I)", "heatmap_both_in.png")):
             grid = [[float("nan")] * len(values[a]) for _ in values[b]]
             for p in points:
-                grid[values[b].index(float(p[b]))][values[a].index(float(p[a]))] = float(p[name])
+                grid[values[b].index(value[b](p))][values[a].index(value[a](p))] = float(p[name])
             fig, ax = plt.subplots(figsize=(1.2 * len(values[a]) + 2.5, 0.8 * len(values[b]) + 1.8))
             im = ax.imshow(grid, origin="lower", aspect="auto", cmap="viridis")
-            ax.set_xticks(range(len(values[a])), ["%g" % v for v in values[a]])
-            ax.set_yticks(range(len(values[b])), ["%g" % v for v in values[b]])
+            ax.set_xticks(range(len(values[a])), [value_text(v) for v in values[a]])
+            ax.set_yticks(range(len(values[b])), [value_text(v) for v in values[b]])
             for i, row in enumerate(grid):
                 for j, v in enumerate(row):
                     ax.text(j, i, "%.3g" % v, ha="center", va="center", color="w", fontsize=8)

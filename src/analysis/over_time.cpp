@@ -69,9 +69,7 @@ std::optional<GroupSection> section_of(const std::vector<const RunRecord*>& phas
 // The model of group i (a study point may change the speed, hence f_m).
 ModelConfig group_config(const BatchInputs& in, const BatchAnalysis& a, std::size_t i) {
   if (a.keys.empty() || in.points.size() <= i) return in.config;
-  std::vector<std::string> keys;
-  for (const SweepAxis& axis : in.axes) keys.push_back(axis.key);
-  return apply_point(in.config, keys, in.points[i]);
+  return apply_point(in.config, in.axes, in.points[i]);
 }
 
 // The mean PSD of delta over the group's densest series, if they resolve the mesh harmonics (each
@@ -189,11 +187,7 @@ void SeriesDigests::add(const BatchInputs& in, const RunRecord& r, const std::ve
   auto model = mesh_frequency_duration_.find(r.point);
   if (model == mesh_frequency_duration_.end()) {
     ModelConfig c = in.config;
-    if (r.point < in.points.size()) {
-      std::vector<std::string> keys;
-      for (const SweepAxis& axis : in.axes) keys.push_back(axis.key);
-      c = apply_point(in.config, keys, in.points[r.point]);
-    }
+    if (r.point < in.points.size()) c = apply_point(in.config, in.axes, in.points[r.point]);
     model = mesh_frequency_duration_.emplace(r.point, std::make_pair(1.0 / mesh_period(derive(c.gear)), c.run.duration)).first;
   }
   const auto [mesh_frequency, duration] = model->second;

@@ -106,7 +106,8 @@ BatchAnalysis analyse_batch(const BatchInputs& in, const AnalysisSettings& setti
   for (const PointAnalysis& p : study.points) {
     out.mu.push_back(p.stats);
     std::string k = std::to_string(p.point);
-    for (double v : p.values) k += "," + general(v);
+    for (std::size_t a = 0; a < p.values.size(); ++a)
+      k += "," + (study.axes[a].text() ? study.axes[a].value_text(p.values[a]) : general(p.values[a]));
     out.keys.push_back(k);
     groups.emplace_back();
   }

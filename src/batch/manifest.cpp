@@ -108,6 +108,8 @@ YAML::Node load_manifest(const std::string& path, std::vector<std::string>& item
 void read_grid(const YAML::Node& root, Manifest& m, const Fail& fail) {
   m.axes = field<std::vector<std::string>>(root, "axes", "", fail);
   if (m.axes.empty() || m.axes.front() != kFrictionKey) fail("axes must start with " + std::string(kFrictionKey));
+  if (root["axis_labels"])
+    m.axis_labels = field<std::map<std::string, std::vector<std::string>>>(root, "axis_labels", "", fail);
   const YAML::Node points = root["points"];
   if (!points || !points.IsSequence()) fail("points must be a list");
   for (std::size_t i = 0; i < points.size(); ++i) {
@@ -186,6 +188,7 @@ std::string manifest_text(const Manifest& m) {
   out << YAML::Key << "shard_count" << YAML::Value << m.shard_count;
   if (m.study) {  // format 2: the grid, one entry per point with its value on every axis
     out << YAML::Key << "axes" << YAML::Value << YAML::Flow << m.axes;
+    if (!m.axis_labels.empty()) out << YAML::Key << "axis_labels" << YAML::Value << YAML::Flow << m.axis_labels;
     out << YAML::Key << "points" << YAML::Value << YAML::BeginSeq;
     for (std::size_t i = 0; i < m.points.size(); ++i)
       out << YAML::Flow << YAML::BeginMap << YAML::Key << "point" << YAML::Value << i << YAML::Key << "values"

@@ -31,6 +31,41 @@ int schema_position(const std::string& key) {
   return it == keys.end() ? -1 : static_cast<int>(it - keys.begin());
 }
 
+// The table entry of a sweepable "section.key" (schema_position() >= 0).
+KeySpec key_spec(const std::string& key) {
+  const auto dot = key.find('.');
+  for (const Section<ModelConfig>& section : model_sections())
+    if (section.name() == key.substr(0, dot)) {
+      const SectionSpec spec = section.spec();  // built on each call: keep it while its entry is read
+      if (const KeySpec* k = spec.find(key.substr(dot + 1))) return *k;
+    }
+  throw std::logic_error("no table entry for sweep key " + key);
+}
+
+// A text axis: each value read by the key's own reader (choices and message from the table).
+void parse_labels(const std::string& key, const YAML::Node& v, SweepAxis& axis, std::vector<std::string>& errors) {
+  const std::string path = "monte_carlo.sweep." + key;
+  if (!v.IsSequence() || v.size() == 0) {
+    errors.push_back(path + " = " + detail::show(v) + " must be a non-empty list of values; allowed " +
+                     key_spec(key).expected());
+    return;
+  }
+  const KeySpec spec = key_spec(key);
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    YAML::Node one;
+    one[spec.name] = v[i];
+    SectionReader reader(one, "monte_carlo.sweep." + key.substr(0, key.find('.')) + ".", errors);
+    if (const auto value = reader.read(spec)) {
+      if (std::find(axis.labels.begin(), axis.labels.end(), value->text) != axis.labels.end()) {
+        errors.push_back(path + " repeats " + value->text + " (the values of an axis must differ)");
+        return;
+      }
+      axis.values.push_back(static_cast<double>(axis.labels.size()));
+      axis.labels.push_back(value->text);
+    }
+  }
+}
+
 bool is_range(const YAML::Node& v) {
   return v.IsMap() && (v["from"] || v["to"] || v["count"] || v["scale"]);
 }
@@ -55,6 +90,11 @@ void parse_values(const std::string& key, const YAML::Node& v, std::vector<Sweep
   SweepAxis axis;
   axis.key = key;
   const std::size_t before = errors.size();
+  if (key_spec(key).kind == KeyKind::Text) {
+    parse_labels(key, v, axis, errors);
+    if (errors.size() == before) axes.push_back(std::move(axis));
+    return;
+  }
   if (v.IsSequence()) {
     for (std::size_t i = 0; i < v.size(); ++i) {
       double x;
@@ -116,7 +156,8 @@ std::vector<std::string> sweepable_keys() {
   for (const Section<ModelConfig>& section : model_sections())
     if (section.name() == "gear_pair" || section.name() == "load")
       for (const KeySpec& k : section.spec().keys)
-        if (k.kind == KeyKind::Real || k.kind == KeyKind::Integer) keys.push_back(section.name() + "." + k.name);
+        if (k.kind == KeyKind::Real || k.kind == KeyKind::Integer || (k.kind == KeyKind::Text && !k.choices.empty()))
+          keys.push_back(section.name() + "." + k.name);
   return keys;
 }
 
@@ -160,30 +201,54 @@ std::vector<std::string> Study::keys() const {
   return k;
 }
 
-std::string point_text(const std::vector<std::string>& keys, const std::vector<double>& values) {
+std::string SweepAxis::value_text(double value, int digits) const {
+  if (text()) return labels.at(static_cast<std::size_t>(value));
+  std::ostringstream s;
+  s.precision(digits);
+  s << value;
+  return s.str();
+}
+
+std::string point_text(const std::vector<SweepAxis>& axes, const std::vector<double>& values) {
   std::string s;
-  for (std::size_t i = 0; i < keys.size() && i < values.size(); ++i)
-    s += (i ? ", " : "") + keys[i] + " = " + text(values[i]);
+  for (std::size_t i = 0; i < axes.size() && i < values.size(); ++i)
+    s += (i ? ", " : "") + axes[i].key + " = " + axes[i].value_text(values[i]);
   return s;
+}
+
+std::string point_text(const std::vector<std::string>& keys, const std::vector<double>& values) {
+  std::vector<SweepAxis> axes;
+  for (const std::string& k : keys) axes.push_back({k, {}, {}});
+  return point_text(axes, values);
 }
 
 std::string column_name(const std::string& key) { return key == kFrictionKey ? "mu" : key; }
 
 ModelConfig apply_point(const ModelConfig& base, const std::vector<std::string>& keys,
                         const std::vector<double>& values) {
+  std::vector<SweepAxis> axes;
+  for (const std::string& k : keys) axes.push_back({k, {}, {}});
+  return apply_point(base, axes, values);
+}
+
+ModelConfig apply_point(const ModelConfig& base, const std::vector<SweepAxis>& axes,
+                        const std::vector<double>& values) {
   YAML::Node root = to_yaml(base);
   if (base.run.snapshot_times.empty()) root["run"]["snapshot_times"] = YAML::Node(YAML::NodeType::Sequence);
-  for (std::size_t i = 0; i < keys.size(); ++i) {
-    const auto dot = keys[i].find('.');
+  for (std::size_t i = 0; i < axes.size(); ++i) {
+    const std::string& key = axes[i].key;
+    const auto dot = key.find('.');
     const double v = values.at(i);
     YAML::Node node(v);
-    if (v == std::floor(v) && std::abs(v) < 9007199254740992.0) {
+    if (axes[i].text()) {
+      node = YAML::Node(axes[i].value_text(v));
+    } else if (v == std::floor(v) && std::abs(v) < 9007199254740992.0) {
       for (const Section<ModelConfig>& section : model_sections())
         for (const KeySpec& k : section.spec().keys)
-          if (k.kind == KeyKind::Integer && section.name() + "." + k.name == keys[i])
+          if (k.kind == KeyKind::Integer && section.name() + "." + k.name == key)
             node = YAML::Node(static_cast<long long>(v));
     }
-    root[keys[i].substr(0, dot)][keys[i].substr(dot + 1)] = node;
+    root[key.substr(0, dot)][key.substr(dot + 1)] = node;
   }
   return parse_config(root);
 }
@@ -191,7 +256,7 @@ ModelConfig apply_point(const ModelConfig& base, const std::vector<std::string>&
 Study make_study(const ModelConfig& base, const std::vector<double>& mu, const std::vector<SweepAxis>& sweep) {
   Study study;
   study.base = base;
-  study.axes.push_back({kFrictionKey, mu});
+  study.axes.push_back({kFrictionKey, mu, {}});
   for (const SweepAxis& a : sweep) {
     if (a.key == kFrictionKey) study.axes.front().values = a.values;
     else study.axes.push_back(a);
@@ -217,7 +282,7 @@ Study make_study(const ModelConfig& base, const std::vector<double>& mu, const s
       point.values[a] = study.axes[a].values[rest % study.axes[a].values.size()];
       rest /= study.axes[a].values.size();
     }
-    const std::string where = "monte_carlo.sweep: point " + std::to_string(p) + " (" + point_text(keys, point.values) + ")";
+    const std::string where = "monte_carlo.sweep: point " + std::to_string(p) + " (" + point_text(study.axes, point.values) + ")";
     // The mesh must stay resolved by the grid: a step may not span a stiffness interval.
     std::string speed_problem;
     for (std::size_t a = 0; a < keys.size(); ++a) {
@@ -225,7 +290,7 @@ Study make_study(const ModelConfig& base, const std::vector<double>& mu, const s
       try {
         std::vector<double> still = point.values;
         still[a] = 0.0;  // the geometry without this check; other errors come from apply_point below
-        const ModelConfig geometry = apply_point(base, keys, still);
+        const ModelConfig geometry = apply_point(base, study.axes, still);
         const GearPair g = derive(geometry.gear);
         const double shortest = std::min(g.single_pair_angle, g.mesh_period_angle - g.single_pair_angle);
         const double h = base.run.time_step, w = point.values[a];
@@ -238,7 +303,7 @@ Study make_study(const ModelConfig& base, const std::vector<double>& mu, const s
     }
     try {
       if (!speed_problem.empty()) throw ConfigError(speed_problem);
-      point.config = apply_point(base, keys, point.values);
+      point.config = apply_point(base, study.axes, point.values);
     } catch (const ConfigError& e) {
       if (++bad <= 10) {
         std::string why = e.what();

@@ -34,12 +34,18 @@ std::string p_text(const RankTest& t) {
   return fixed(t.p_value, 4);
 }
 
+// A value of axis `a` as reports write it: a text axis's label, else the number.
+std::string axis_value(const StudyAnalysis& s, std::size_t a, double v, int digits = 0) {
+  if (s.axes[a].text()) return s.axes[a].value_text(v);
+  return digits ? general(v, digits) : general(v);
+}
+
 // "load.sigma = 5, gear_pair.friction_coefficient = 0.04" for the fixed axes of a slice.
 std::string fixed_text(const StudyAnalysis& s, const AxisSlice& l, const char* sep, const char* eq) {
   std::string t;
   for (std::size_t a = 0; a < s.axes.size(); ++a) {
     if (a == l.axis || s.axes[a].values.size() < 2) continue;
-    t += (t.empty() ? "" : sep) + column_name(s.axes[a].key) + eq + general(l.fixed[a], 6);
+    t += (t.empty() ? "" : sep) + column_name(s.axes[a].key) + eq + axis_value(s, a, l.fixed[a], 6);
   }
   return t;
 }
@@ -68,7 +74,7 @@ void write_points_csv(const fs::path& dir, const StudyAnalysis& st, std::vector<
     const MuAnalysis& m = p.stats;
     const BoxStats& d = m.center_distance;
     o << p.point;
-    for (double v : p.values) o << ',' << general(v);
+    for (std::size_t a = 0; a < p.values.size(); ++a) o << ',' << axis_value(st, a, p.values[a]);
     o << ',' << d.n << ',' << general(d.min * U) << ',' << general(d.q1 * U) << ',' << general(d.median * U) << ',' << general(d.median_low * U)
       << ',' << general(d.median_high * U) << ',' << general(d.q3 * U) << ',' << general(d.max * U) << ',' << m.phase_runs << ','
       << general(m.phase_center_distance.median * U) << ',' << general(m.s1 ? m.s1->center_distance * U : std::nan(""));
@@ -118,7 +124,8 @@ void write_study_head(std::ostream& r, const BatchInputs& in, const StudyAnalysi
        "(the same normals) at every point (common random numbers).\n\n| axis | values |\n|---|---|\n";
   for (const SweepAxis& a : st.axes) {
     r << "| `" << a.key << "` |";
-    for (std::size_t i = 0; i < a.values.size(); ++i) r << (i ? ", " : " ") << general(a.values[i], 6);
+    for (std::size_t i = 0; i < a.values.size(); ++i)
+      r << (i ? ", " : " ") << (a.text() ? a.value_text(a.values[i]) : general(a.values[i], 6));
     r << " |\n";
   }
   r << "\nUnits: d in mm·s^-1/2, t_ss in s. Medians with their exact " << pct
@@ -140,8 +147,8 @@ void write_study_axes(std::ostream& r, const StudyAnalysis& st, const AnalysisSe
       const PointAnalysis &first = st.points[l.points.front()], &last = st.points[l.points.back()];
       r << "\n### `" << key << "`" << (others.empty() ? "" : " at " + others) << "\n\n";
       r << "Median d goes from " << median_ci(first.stats.center_distance, U, 3) << " at " << column_name(key) << " = "
-        << general(first.values[axis], 6) << " to " << median_ci(last.stats.center_distance, U, 3) << " at "
-        << general(last.values[axis], 6) << " mm·s^-1/2. Friedman's test blocked by realization (the design's common "
+ << axis_value(st, axis, first.values[axis], 6) << " to " << median_ci(last.stats.center_distance, U, 3) << " at "
+        << axis_value(st, axis, last.values[axis], 6) << " mm·s^-1/2. Friedman's test blocked by realization (the design's common "
         << "random numbers): χ² = " << (l.friedman.valid ? fixed(l.friedman.statistic, 2) : "–") << ", df = "
         << l.friedman.df << ", " << l.friedman.n << " realizations, p = " << p_text(l.friedman) << "; Kruskal–Wallis: H = "
         << (l.kruskal_wallis.valid ? fixed(l.kruskal_wallis.statistic, 2) : "–") << ", p = " << p_text(l.kruskal_wallis)
@@ -158,7 +165,7 @@ void write_study_axes(std::ostream& r, const StudyAnalysis& st, const AnalysisSe
         const MuAnalysis& m = pa.stats;
         const BoxStats& d = m.center_distance;
         const BoxStats& t = m.steady_state_time;
-        r << "| " << general(pa.values[axis], 6) << " | " << d.n << " | " << median_ci(d, U, 3) << " | "
+        r << "| " << axis_value(st, axis, pa.values[axis], 6) << " | " << d.n << " | " << median_ci(d, U, 3) << " | "
           << fixed(d.q1 * U, 3) << "–" << fixed(d.q3 * U, 3) << " | " << fixed(m.phase_center_distance.median * U, 3)
           << " | " << percent(m.d_exceeds_phase_median) << " | " << percent(m.delta_in_interval) << " | "
           << percent(m.delta_dot_in_interval) << " | " << percent(pa.both_in_interval) << " | " << median_ci(t, 1, 4)

@@ -81,7 +81,11 @@ const std::string& RunInfos::parameters(const ModelConfig& config, const RunSpec
     YAML::Node n = YAML::Load(text);
     const StudyPoint& p = study_->points.at(run.point);
     n["study"]["point"] = p.index;
-    for (std::size_t a = 0; a < study_->axes.size(); ++a) n["study"]["values"][study_->axes[a].key] = p.values[a];
+    for (std::size_t a = 0; a < study_->axes.size(); ++a) {
+      const SweepAxis& axis = study_->axes[a];
+      if (axis.text()) n["study"]["values"][axis.key] = axis.value_text(p.values[a]);
+      else n["study"]["values"][axis.key] = p.values[a];
+    }
     text = emit(n);
   }
   std::lock_guard<std::mutex> lock(mutex_);
@@ -187,6 +191,8 @@ void write_manifest(const Study& study, const BatchSettings& settings,
   m.shard_count = settings.shard_count;
   if (m.study) {
     m.axes = study.keys();
+    for (const SweepAxis& a : study.axes)
+      if (a.text()) m.axis_labels[a.key] = a.labels;
     for (const StudyPoint& p : study.points) m.points.push_back(p.values);
   }
   for (const RunSpec& r : runs) m.runs.push_back({r.name, bag_file_name(r.name), r.kind, r.mu, r.index, r.point});

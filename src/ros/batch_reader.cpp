@@ -72,6 +72,16 @@ std::string first_difference(const std::string& a, const std::string& b) {
   }
 }
 
+// A study manifest's axes with the labels of its text axes (values: filled by the caller).
+std::vector<SweepAxis> manifest_axes(const Manifest& m) {
+  std::vector<SweepAxis> axes;
+  for (const std::string& key : m.axes) {
+    const auto labels = m.axis_labels.find(key);
+    axes.push_back({key, {}, labels == m.axis_labels.end() ? std::vector<std::string>{} : labels->second});
+  }
+  return axes;
+}
+
 FolderManifest parse_manifest(const fs::path& path) {
   FolderManifest m;
   try {
@@ -90,14 +100,14 @@ FolderManifest parse_manifest(const fs::path& path) {
   if (m.study) {
     for (std::size_t i = 0; i < m.points.size(); ++i) {
       try {
-        m.point_keys.push_back(config_key(apply_point(m.model, m.axes, m.points[i])));
+        m.point_keys.push_back(config_key(apply_point(m.model, manifest_axes(m), m.points[i])));
       } catch (const ConfigError& ex) {
         throw BatchReadError("manifest " + path.string() + ": points[" + std::to_string(i) +
                              "] is not a valid configuration: " + ex.what());
       }
     }
     YAML::Emitter e;
-    e << YAML::Flow << m.axes << m.points;
+    e << YAML::Flow << m.axes << m.axis_labels << m.points;
     m.grid = e.c_str();
   }
   return m;
@@ -558,7 +568,7 @@ void set_points(BatchInputs& in, Listing& listing) {
   Listed& listed = listing.listed;
   if (manifests.front().study) {
     for (std::size_t a = 0; a < manifests.front().axes.size(); ++a) {
-      SweepAxis axis{manifests.front().axes[a], {}};
+      SweepAxis axis = manifest_axes(manifests.front())[a];
       for (const auto& p : manifests.front().points)
         if (std::find(axis.values.begin(), axis.values.end(), p[a]) == axis.values.end()) axis.values.push_back(p[a]);
       in.axes.push_back(axis);
@@ -567,7 +577,7 @@ void set_points(BatchInputs& in, Listing& listing) {
   } else {  // format 1, a mu sweep: one point per mu, ascending (as its report)
     std::set<double> mus;
     for (const auto& [name, entry] : listed) mus.insert(entry.first.mu);
-    in.axes.push_back({kFrictionKey, std::vector<double>(mus.begin(), mus.end())});
+    in.axes.push_back({kFrictionKey, std::vector<double>(mus.begin(), mus.end()), {}});
     for (double mu : mus) in.points.push_back({mu});
     for (auto& [name, entry] : listed)
       entry.first.point = static_cast<std::size_t>(std::distance(mus.begin(), mus.find(entry.first.mu)));

@@ -212,7 +212,7 @@ int main(int argc, char** argv) try {
       char buf[16];
       std::snprintf(buf, sizeof buf, "p%04zu_", point.index);
       prefix = buf;
-      std::printf("# point %zu: %s\n", point.index, gd::point_text(study.keys(), point.values).c_str());
+      std::printf("# point %zu: %s\n", point.index, gd::point_text(study.axes, point.values).c_str());
     }
     std::vector<gd::LaneSpec> lanes;
     std::vector<std::string> names;

@@ -9,6 +9,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <stdexcept>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -50,6 +51,8 @@ struct Manifest {
   int shard_index = 0, shard_count = 1;
   std::vector<std::string> axes;            // format 2: the swept keys, friction first
   std::vector<std::vector<double>> points;  // format 2: each point's value on every axis
+  // format 2: the labels of each text axis (gear_pair.friction_model, ...); its values are their positions
+  std::map<std::string, std::vector<std::string>> axis_labels;
   std::vector<ManifestRun> runs;
   const char* format() const { return study ? kManifestFormatStudy : kManifestFormat; }
 };

@@ -17,13 +17,20 @@ namespace gear_dynamics {
 
 constexpr const char* kFrictionKey = "gear_pair.friction_coefficient";
 
-// One axis of the grid: "section.key" and its values, in the order given (distinct).
+// One axis of the grid: "section.key" and its values, in the order given (distinct). An axis over a
+// text key (gear_pair.friction_model, ...) keeps its values in `labels` and their positions
+// 0, 1, ... in `values`, so the grid, the points and the manifest stay numeric.
 struct SweepAxis {
   std::string key;
   std::vector<double> values;
+  std::vector<std::string> labels;  // empty for a number key
+  bool text() const { return !labels.empty(); }
+  // The value as reports write it: the label of a text axis, else the number (`digits` significant).
+  std::string value_text(double value, int digits = 12) const;
 };
 
-// The keys a sweep may name: every number key of the sections gear_pair and load (model_sections()), in their order.
+// The keys a sweep may name: every number key and every text key with a list of choices
+// (friction_model, friction_direction, model) of the sections gear_pair and load (model_sections()), in their order.
 // Not run.*: every point shares one grid, T, window and seed (the seed would break common random
 // numbers; T, h and the window must be common for the points to be compared).
 std::vector<std::string> sweepable_keys();
@@ -61,10 +68,14 @@ Study make_study(const ModelConfig& base, const std::vector<double>& mu, const s
 
 // The base configuration with `values` set at `keys` (through YAML and parse_config, so a bad value
 // throws the validator's message).
+ModelConfig apply_point(const ModelConfig& base, const std::vector<SweepAxis>& axes,
+                        const std::vector<double>& values);
+// The same over number keys only (a manifest's keys and values).
 ModelConfig apply_point(const ModelConfig& base, const std::vector<std::string>& keys,
                         const std::vector<double>& values);
 
-// "gear_pair.friction_coefficient = 0.04, load.sigma = 2.5" (12 significant digits).
+// "gear_pair.friction_coefficient = 0.04, gear_pair.friction_model = xu" (numbers with 12 significant digits).
+std::string point_text(const std::vector<SweepAxis>& axes, const std::vector<double>& values);
 std::string point_text(const std::vector<std::string>& keys, const std::vector<double>& values);
 
 // The short column name of a key in reports: "mu" for the friction axis, else the key itself.

@@ -12,7 +12,7 @@ namespace gd = gear_dynamics;
 // analyse_study: points, lines of the grid and their tests, recomputed by hand on a small set.
 TEST(StudyAnalysis, PointsLinesAndTests) {
   gd::BatchInputs in;
-  in.axes = {{"gear_pair.friction_coefficient", {0.0, 0.04}}, {"load.sigma", {1, 2, 3}}};
+  in.axes = {{"gear_pair.friction_coefficient", {0.0, 0.04}, {}}, {"load.sigma", {1, 2, 3}, {}}};
   for (double mu : {0.0, 0.04})
     for (double sg : {1.0, 2.0, 3.0}) in.points.push_back({mu, sg});
   for (std::size_t p = 0; p < in.points.size(); ++p)

@@ -141,6 +141,44 @@ TEST(SweepGrid, ArgumentOfGearRun) {
   EXPECT_NE(refusal([] { gd::parse_sweep_argument("load.sigma"); }).find("--sweep expects"), std::string::npos);
 }
 
+TEST(SweepGrid, TextAxesTakeTheKeysChoices) {
+  // A text axis keeps its values as labels (their positions are its numbers), each read by the key's
+  // own table entry, so an unknown value is refused with the key, the value and the allowed choices.
+  const auto axes = sweep_of("{gear_pair.friction_model: [xu, constant], load.sigma: [1, 2]}");
+  ASSERT_EQ(axes.size(), 2u);
+  EXPECT_EQ(axes[0].key, "gear_pair.friction_model");
+  EXPECT_EQ(axes[0].labels, (std::vector<std::string>{"xu", "constant"}));
+  EXPECT_EQ(axes[0].values, (std::vector<double>{0, 1}));
+  EXPECT_EQ(axes[0].value_text(0), "xu");
+  EXPECT_FALSE(axes[1].text());
+  std::vector<std::string> errors;
+  sweep_of("{gear_pair.friction_model: [xu, coulomb]}", &errors);
+  ASSERT_EQ(errors.size(), 1u);
+  for (const char* part : {"monte_carlo.sweep.gear_pair.friction_model", "coulomb", "benedict_kelley", "iso_tr_13989"})
+    EXPECT_NE(errors[0].find(part), std::string::npos) << errors[0];
+  errors.clear();
+  sweep_of("{gear_pair.friction_direction: [reversing, reversing]}", &errors);
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("repeats reversing"), std::string::npos) << errors[0];
+}
+
+TEST(Study, TextAxisSetsTheKeyAtEachPoint) {
+  const gd::ModelConfig model = short_model(0.01);
+  const gd::Study st = gd::make_study(
+      model, {0.0, 0.04}, sweep_of("{gear_pair.friction_model: [constant, benedict_kelley, xu], load.sigma: [1, 2]}"));
+  ASSERT_EQ(st.points.size(), 12u);
+  const std::vector<gd::FrictionModel> expected = {gd::FrictionModel::kConstant, gd::FrictionModel::kBenedictKelley,
+                                                   gd::FrictionModel::kXu};
+  for (const gd::StudyPoint& p : st.points) {
+    // plan order: mu slowest, then friction_model, then sigma
+    EXPECT_EQ(p.config.gear.friction_model, expected[(p.index / 2) % 3]) << p.index;
+    EXPECT_EQ(p.config.load.sigma, 1.0 + static_cast<double>(p.index % 2)) << p.index;
+    EXPECT_EQ(p.config.friction_coefficient, p.index < 6 ? 0.0 : 0.04) << p.index;
+  }
+  EXPECT_EQ(gd::point_text(st.axes, st.points[9].values),
+            "gear_pair.friction_coefficient = 0.04, gear_pair.friction_model = benedict_kelley, load.sigma = 2");
+}
+
 TEST(Study, CartesianProductFirstAxisSlowest) {
   const gd::ModelConfig model = short_model(0.01);
   const gd::Study st = gd::make_study(model, {0.0, 0.04}, sweep_of("{load.sigma: [1, 2, 3]}"));
