@@ -28,7 +28,7 @@ gd::BatchSettings study_settings(const std::string& dir, std::vector<double> sig
   gd::BatchSettings s;
   s.mu = {0.0, 0.04};
   // In schema order, as parse_batch_settings gives them.
-  s.sweep = {{"gear_pair.pinion_speed", {104.71975511965977, 150.0}}, {"load.sigma", std::move(sigma)}};
+  s.sweep = {{"gear_pair.pinion_speed", {104.71975511965977, 150.0}, {}}, {"load.sigma", std::move(sigma), {}}};
   s.realizations = 3;
   s.phase_ensemble = false;
   s.record_rate = 5e4;
