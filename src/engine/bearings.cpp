@@ -152,7 +152,7 @@ const BearingsOutputSpec* find_bearings_output(const std::string& name) {
 
 BearingsOutputs bearings_outputs(const Ensemble& ensemble, int lane) {
   const BearingsModel::State y = ensemble.model_state().col(lane);
-  return bearings_outputs(BearingsModel(ensemble.gear()), ensemble.gear(), ensemble.mesh(), ensemble.time_step(),
+  return bearings_outputs(*ensemble.bearings_model(), ensemble.gear(), ensemble.mesh(), ensemble.time_step(),
                           ensemble.step_index(), y);
 }
 

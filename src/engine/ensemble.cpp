@@ -48,7 +48,10 @@ Ensemble::Ensemble(const GearPair& gear, double time_step, const InitialState& i
   sigma_.setZero(p);
   drift_.setZero(p);
   normals_.setZero(p, kNormalChunk);
-  if (gear.in.model == GearModel::kBearings) model_state_.setZero(BearingsModel::kStates, p);
+  if (gear.in.model == GearModel::kBearings) {
+    bearings_ = std::make_shared<const BearingsModel>(gear_);
+    model_state_.setZero(BearingsModel::kStates, p);
+  }
   reset();
 }
 
@@ -65,7 +68,7 @@ void Ensemble::reset() {
     sigma_[i] = s.sigma;
     drift_[i] = s.drift;
   }
-  if (model_state_.size() > 0) {  // at rest on the bearings: delta_m = delta_t
+  if (bearings_) {  // at rest on the bearings: delta_m = delta_t
     model_state_.setZero();
     model_state_.row(BearingsModel::kDelta).head(lanes()).setConstant(initial_.deflection);
     model_state_.row(BearingsModel::kDeltaDot).head(lanes()).setConstant(initial_.velocity);
@@ -89,7 +92,7 @@ void Ensemble::set_load(int lane, double load) {
 
 void Ensemble::set_state(int lane, double delta, double velocity) {
   if (lane < 0 || lane >= lanes()) throw std::out_of_range("Ensemble::set_state: no such lane");
-  if (model_state_.size() > 0)
+  if (bearings_)
     throw std::invalid_argument("Ensemble::set_state: gear_pair.model = bearings has no (delta, delta_dot) state; "
                                 "allowed: torsional");
   delta_[lane] = delta;
@@ -107,7 +110,7 @@ void Ensemble::refill_normals(std::uint64_t first_index) {
 void Ensemble::step() {
   const auto index = static_cast<std::uint64_t>(n_) + 1;  // normal of this step
   if (index >= normals_first_ + kNormalChunk) refill_normals(normals_first_ + kNormalChunk);
-  if (model_state_.size() > 0) {
+  if (bearings_) {
     step_bearings(static_cast<Eigen::Index>(index - normals_first_));
     return;
   }
@@ -136,8 +139,7 @@ void Ensemble::step() {
 void Ensemble::step_bearings(Eigen::Index column) {
   // The lanes in SIMD packets, each lane BearingsRealization's arithmetic (the same load step and
   // bearings_step's bits), so that a realization's bits depend neither on its block nor on its lane.
-  const BearingsModel model(gear_);
-  const dispatch::BearingsEnsembleStep step{&model,
+  const dispatch::BearingsEnsembleStep step{bearings_.get(),
                                              &gear_,
                                              &mesh_,
                                              n_,

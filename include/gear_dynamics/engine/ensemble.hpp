@@ -2,7 +2,8 @@
 // one SIMD lane per realization, RK4 with the stiffness switches split out (doc/model.md §5).
 // gear_pair.model = bearings runs here too, in SIMD packets of lanes of its own kernel
 // (src/engine/dispatched/bearings_step.cpp, bit for bit bearings_step, engine/bearings.hpp), its
-// delta and delta_dot the mesh deflection delta_m and its rate: the observers, the recorder and the batch see it as they see the torsional model.
+// delta and delta_dot the mesh deflection delta_m and its rate: the observers, the recorder and the
+// batch see it as they see the torsional model.
 // The CLI and the Monte Carlo batch run this class; the live node steps its one realization with
 // Realization (engine/realization.hpp), the same kernel (engine/rk4_kernel.hpp) on one lane. Every
 // lane's arithmetic is independent of the other lanes (the build uses -ffp-contract=off), so a
@@ -11,6 +12,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -20,6 +22,8 @@
 #include "gear_dynamics/engine/normal_stream.hpp"
 
 namespace gear_dynamics {
+
+class BearingsModel;  // engine/bearings.hpp
 
 // Generation of the engine's numbers: raised whenever a change alters any run's results (1: Box-Muller
 // normals, unfused RK4; 2: Boost's ziggurat normals, fused multiply-adds; 3: backlash crossings
@@ -73,6 +77,8 @@ class Ensemble {
   double time_step() const { return h_; }
   std::uint64_t seed() const { return seed_; }
   const GearPair& gear() const { return gear_; }
+  // The bearings model of gear(), built once; null for the torsional model.
+  const BearingsModel* bearings_model() const { return bearings_.get(); }
   const MeshSchedule& mesh() const { return mesh_; }
   const LaneSpec& lane(int i) const { return spec_[i]; }
 
@@ -86,7 +92,7 @@ class Ensemble {
   const Eigen::ArrayXd& padded_velocity() const { return velocity_; }
   // The whole state of each lane of a model with more than (delta, delta_dot), one column per lane
   // (BearingsModel::State; bearings_outputs(ensemble, lane) reads it); empty for the torsional model.
-  auto model_state() const { return model_state_.leftCols(model_state_.size() > 0 ? lanes() : 0); }
+  auto model_state() const { return model_state_.leftCols(bearings_ ? lanes() : 0); }
 
   // Run-time changes; they take effect at the next step boundary.
   void set_mu(int lane, double mu);
@@ -107,6 +113,7 @@ class Ensemble {
 
   GearPair gear_;
   MeshSchedule mesh_;
+  std::shared_ptr<const BearingsModel> bearings_;  // bearings_model()
   double h_;
   InitialState initial_;
   std::vector<LaneSpec> spec_;
