@@ -2,8 +2,19 @@
 is a function returning its problems (an AssertionError or OSError counts as one), printed as
 `CLASS.NAME: ok|FAILED` and written as a JUnit test case."""
 import os
+import re
 import time
 import xml.etree.ElementTree as ET
+
+# Terminal escapes (roslaunch sets the window title, ROS logs are coloured) and the other characters
+# XML 1.0 cannot hold: left in a failure's text they make the whole JUnit file unreadable.
+_ESCAPE = re.compile(r"\x1b(\[[0-9;?]*[ -/]*[@-~]|\][^\x07\x1b]*(\x07|\x1b\\)?|.)", re.S)
+_NOT_XML = re.compile("[^\t\n\r\x20-\ud7ff\ue000-\ufffd\U00010000-\U0010ffff]")
+
+
+def xml_text(text):
+    """`text` without terminal escapes, other characters outside XML 1.0 as '?'."""
+    return _NOT_XML.sub("?", _ESCAPE.sub("", text))
 
 
 def run_cases(classname, cases, junit_path=None):
@@ -20,7 +31,8 @@ def run_cases(classname, cases, junit_path=None):
         print(f"{classname}.{name}: {'ok' if not problems else 'FAILED'}")
         if problems:
             failures += 1
-            ET.SubElement(case, "failure", message=problems[0][:200]).text = "\n".join(problems)
+            text = xml_text("\n".join(problems))
+            ET.SubElement(case, "failure", message=text.splitlines()[0][:200] if text else "").text = text
             for p in problems:
                 print("  " + p)
     suite.set("tests", str(len(cases)))

@@ -18,6 +18,9 @@ import sys
 import time
 import xml.etree.ElementTree as ET
 
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+from junit_cases import xml_text  # noqa: E402
+
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 BLOCK = re.compile(r"^```(bash[^\n]*)\n(.*?)^```", re.M | re.S)
 TIMEOUT = 600  # s per block: the longest documented command is realizations:=1000
@@ -101,7 +104,8 @@ def main():
                 print(f"{'ok  ' if ok else 'FAIL'} {name} ({time.time() - start:.1f} s): {commands[0][:90]}", flush=True)
                 if not ok:
                     counts["failures"] += 1
-                    ET.SubElement(case, "failure", message=f"{name} failed").text = body + "\n---\n" + out[-4000:]
+                    failure = ET.SubElement(case, "failure", message=f"{name} failed")
+                    failure.text = xml_text(body + "\n---\n" + out[-4000:])
                     print(out[-4000:], flush=True)
     finally:
         for p in background:

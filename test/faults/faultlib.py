@@ -3,7 +3,6 @@ master, running this package's executables with private parameters, and reading 
 import contextlib
 import itertools
 import os
-import re
 import shutil
 import signal
 import socket
@@ -21,6 +20,8 @@ from catkin.find_in_workspaces import find_in_workspaces
 
 # The rostests' helpers (test/ros/simtest.py), shared rather than written again.
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "ros"))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from junit_cases import xml_text  # noqa: E402,F401  (re-exported for the suites' JUnit writers)
 from simtest import read_csv, wait_until  # noqa: E402,F401  (re-exported for the fault scripts)
 
 PACKAGE = "gear_dynamics"
@@ -121,7 +122,7 @@ class Suite:
                                    time="%.3f" % seconds)
                 if status != "ok":
                     tag = "skipped" if status == "skipped" else "failure"
-                    text = re.sub(r"[^\t\n\r\x20-\uD7FF\uE000-\uFFFD]", "", message)  # XML 1.0 (no ANSI colours)
+                    text = xml_text(message)
                     ET.SubElement(tc, tag, message=text[:2000]).text = text
             os.makedirs(os.path.dirname(os.path.abspath(self.args.xunit)), exist_ok=True)
             ET.ElementTree(suite).write(self.args.xunit, encoding="utf-8", xml_declaration=True)

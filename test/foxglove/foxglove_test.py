@@ -43,6 +43,7 @@ def junit(path, cases):
     for name, status, message, seconds in cases:
         tc = ET.SubElement(suite, "testcase", classname="foxglove.bags", name=name, time="%.3f" % seconds)
         if status != "ok":
+            message = fl.xml_text(message)
             ET.SubElement(tc, "skipped" if status == "skipped" else "failure", message=message[:2000]).text = message
     os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
     ET.ElementTree(suite).write(path, encoding="utf-8", xml_declaration=True)

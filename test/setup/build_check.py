@@ -12,6 +12,9 @@ import sys
 import time
 import xml.etree.ElementTree as ET
 
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+from junit_cases import xml_text  # noqa: E402
+
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 SKIPPED = "setup: nothing changed since the last build"
 
@@ -61,7 +64,7 @@ def main():
             print("ok   %s (%.1f s)" % (case.__name__, time.time() - start), flush=True)
         except (AssertionError, subprocess.TimeoutExpired) as e:
             failures += 1
-            ET.SubElement(element, "failure", message=case.__name__ + " failed").text = str(e)
+            ET.SubElement(element, "failure", message=case.__name__ + " failed").text = xml_text(str(e))
             print("FAIL %s: %s" % (case.__name__, e), flush=True)
         element.set("time", "%.1f" % (time.time() - start))
     suite.set("tests", "3")

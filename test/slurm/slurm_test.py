@@ -68,7 +68,7 @@ class Cases:
             for name, status, message, seconds in self.cases:
                 tc = ET.SubElement(suite, "testcase", classname="slurm.slurm", name=name, time="%.3f" % seconds)
                 if status != "ok":
-                    text = re.sub(r"[^\t\n\r\x20-\uD7FF\uE000-\uFFFD]", "", message)
+                    text = fl.xml_text(message)
                     ET.SubElement(tc, "skipped" if status == "skipped" else "failure", message=text[:2000]).text = text
             os.makedirs(os.path.dirname(os.path.abspath(self.xunit)), exist_ok=True)
             ET.ElementTree(suite).write(self.xunit, encoding="utf-8", xml_declaration=True)
