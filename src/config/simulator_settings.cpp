@@ -26,6 +26,9 @@ const Section<SimulatorSettings>& simulator_section() {
           .key("t_end", GD_MEMBER(t_end), closed(0, 1e6), "s",
                "where the run stops, a whole number of time steps; 0 = run on forever")
           .key("loop", GD_MEMBER(loop), "at t_end start over (as ~reset) instead of stopping; needs t_end > 0")
+          .key("exit_at_end", GD_MEMBER(exit_at_end),
+               "at t_end end the node (its bag complete) instead of waiting for ~reset, and a launch with "
+               "required:=true with it; needs t_end > 0, not with loop")
           .key("paused", GD_MEMBER(paused), "start paused (then ~unpause or ~step)")
           .key("subscriber_wait", GD_MEMBER(subscriber_wait), closed(0, 60), "s",
                "at real_time_factor 0, wall time held at t = 0 before running, for subscribers still "
@@ -53,7 +56,7 @@ SimulatorSettings parse_simulator_settings(const YAML::Node& root, double time_s
   if (!section || !section.IsMap()) {
     throw ConfigError("invalid configuration: missing section 'simulator' (config/simulator.yaml), "
                       "a map with the keys deterministic, realization, publish_rate, publish_scalars, "
-                      "publish_clock, real_time_factor, t_end, loop, paused, load_input, spectrum_rate, "
+                      "publish_clock, real_time_factor, t_end, loop, exit_at_end, paused, load_input, spectrum_rate, "
                       "spectrum_window, spectrum_sample_rate, spectrum_segment, spectrum_overlap");
   }
   std::vector<std::string> errors;
@@ -74,6 +77,10 @@ SimulatorSettings parse_simulator_settings(const YAML::Node& root, double time_s
   }
   if (in.ok("loop") && in.ok("t_end") && s.loop && s.t_end == 0.0)
     in.error("loop", " = true needs simulator.t_end > 0 (t_end = 0 runs on forever)");
+  if (in.ok("exit_at_end") && in.ok("t_end") && s.exit_at_end && s.t_end == 0.0)
+    in.error("exit_at_end", " = true needs simulator.t_end > 0 (t_end = 0 runs on forever)");
+  if (in.ok("exit_at_end") && in.ok("loop") && s.exit_at_end && s.loop)
+    in.error("exit_at_end", " = true contradicts simulator.loop = true (a loop never ends); allowed: one of them");
   // The spectrum's keys against the grid and each other, only when the topic is on.
   const bool spectrum_ok = in.ok("spectrum_rate") && in.ok("spectrum_window") && in.ok("spectrum_sample_rate") &&
                            in.ok("spectrum_segment") && in.ok("spectrum_overlap");

@@ -584,6 +584,10 @@ void GearSimulator::finished(const LiveSample& last) {
   final_state_pub_.publish(m);
   record(final_state_pub_.getTopic(), m.header.stamp, m);
   record_close();  // the bag of this run is complete; a ~reset opens the next one
+  if (settings_.exit_at_end) {
+    ROS_INFO("gear_simulator: t = %g s reached; ending (simulator.exit_at_end)", last.t);
+    ros::requestShutdown();
+  }
 }
 
 void GearSimulator::idle(const LiveSample& last) {

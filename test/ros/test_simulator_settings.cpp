@@ -82,6 +82,19 @@ TEST(SimulatorSettings, ContradictionsAndTypos) {
   } catch (const gd::ConfigError& e) {
     EXPECT_HAS(std::string(e.what()), "simulator.loop = true needs simulator.t_end > 0");
   }
+  EXPECT_HAS(error_with("exit_at_end", "true"), "simulator.exit_at_end = true needs simulator.t_end > 0");
+  root = shipped();
+  root["simulator"]["t_end"] = 0.4;
+  root["simulator"]["loop"] = true;
+  root["simulator"]["exit_at_end"] = true;
+  try {
+    gd::parse_simulator_settings(root, kStep);
+    FAIL() << "exit_at_end with loop accepted";
+  } catch (const gd::ConfigError& e) {
+    EXPECT_HAS(std::string(e.what()), "simulator.exit_at_end = true contradicts simulator.loop = true");
+  }
+  root["simulator"]["loop"] = false;
+  EXPECT_TRUE(gd::parse_simulator_settings(root, kStep).exit_at_end);
   EXPECT_HAS(error_with("publish_rat", "100"), "simulator.publish_rat is not a known key (a typo?); valid keys:");
   EXPECT_HAS(error_with("publish_rat", "100"), "publish_rate");
   // Several problems are all reported.

@@ -30,6 +30,7 @@ struct SimulatorSettings {
   double real_time_factor = 1.0;  // simulated s per wall s; 0 = as fast as possible
   double t_end = 0.0;             // [s]; 0 = run until stopped
   bool loop = false;              // start over at t_end instead of stopping
+  bool exit_at_end = false;       // end the node at t_end (scripts, a launch that should end)
   bool paused = false;            // start paused
   // [wall s] at real_time_factor 0 (not paused): held at t = 0 this long first, so that a recorder
   // started before the node (rosbag record -a polls the master once a second) connects in time.
