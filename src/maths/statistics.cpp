@@ -226,6 +226,21 @@ RankTest kruskal_wallis(const std::vector<std::vector<double>>& groups) {
   return r;
 }
 
+namespace {
+
+// Two-sided exact sign test of pairs (b[0], b[1]); pairs with b[0] == b[1] carry no sign.
+double sign_test_p(const std::vector<std::vector<double>>& blocks) {
+  std::size_t plus = 0, minus = 0;
+  for (const auto& b : blocks) {
+    if (b[1] > b[0]) ++plus;
+    else if (b[1] < b[0]) ++minus;
+  }
+  const boost::math::binomial_distribution<double> signs(static_cast<double>(plus + minus), 0.5);
+  return std::min(1.0, 2.0 * boost::math::cdf(signs, static_cast<double>(std::min(plus, minus))));
+}
+
+}  // namespace
+
 RankTest friedman(const std::vector<std::vector<double>>& blocks) {
   RankTest r;
   r.statistic = r.p_value = kNaN;
@@ -250,7 +265,8 @@ RankTest friedman(const std::vector<std::vector<double>>& blocks) {
   for (double rs : rank_sum) between += (rs - n * (kk + 1) / 2.0) * (rs - n * (kk + 1) / 2.0);
   if (!(square_sum - c > 0.0)) return r;  // every block entirely tied
   r.statistic = (kk - 1.0) * between / (square_sum - c);
-  r.p_value = chi_square_sf(r.statistic, kk - 1.0);
+  r.p_value = k == 2 ? sign_test_p(blocks) : chi_square_sf(r.statistic, kk - 1.0);
+  r.exact = k == 2;
   r.valid = true;
   return r;
 }

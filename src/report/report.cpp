@@ -291,6 +291,7 @@ void ReportFiles::md_rank_tests(std::ostream& r) const {
     if (!t.valid) r << "not defined (too few groups or blocks, or all tied)";
     else if (t.p_value < 1e-4) r << "< 1e-4";
     else r << fixed(t.p_value, 4);
+    if (t.valid && t.exact) r << " (exact sign test)";
     r << " |\n";
   }
 }

@@ -30,8 +30,9 @@ std::string median_ci(const BoxStats& b, double scale, int decimals) {
 
 std::string p_text(const RankTest& t) {
   if (!t.valid) return "not defined";
-  if (t.p_value < 1e-4) return "< 1e-4";
-  return fixed(t.p_value, 4);
+  const std::string exact = t.exact ? " (exact sign test)" : "";
+  if (t.p_value < 1e-4) return "< 1e-4" + exact;
+  return fixed(t.p_value, 4) + exact;
 }
 
 // A value of axis `a` as reports write it: a text axis's label, else the number.

@@ -49,7 +49,8 @@ def median_interval(x, conf):
 
 
 def friedman(columns):
-    """Friedman's chi-square with the tie correction; columns[j][b] is treatment j in block b."""
+    """Friedman's chi-square with the tie correction and its p (for two treatments the exact sign
+    test's); columns[j][b] is treatment j in block b."""
     data = np.asarray(columns, dtype=float).T  # blocks x treatments
     n, k = data.shape
     ranks = np.apply_along_axis(stats.rankdata, 1, data)
@@ -62,6 +63,9 @@ def friedman(columns):
     if denom <= 0:
         return float("nan"), float("nan")
     chi2 = (12.0 / (n * k * (k + 1)) * float(np.sum(r ** 2)) - 3.0 * n * (k + 1)) / denom
+    if k == 2:  # the sign test, exact (tied blocks carry no sign)
+        up, down = int(np.sum(data[:, 1] > data[:, 0])), int(np.sum(data[:, 1] < data[:, 0]))
+        return chi2, float(stats.binomtest(up, up + down, 0.5).pvalue)
     return chi2, float(stats.chi2.sf(chi2, k - 1))
 
 

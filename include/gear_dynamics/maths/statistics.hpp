@@ -84,11 +84,14 @@ struct RankTest {
   double statistic = 0, p_value = 0;
   std::size_t df = 0, n = 0;  // n: observations (Kruskal-Wallis) or complete blocks (Friedman)
   bool valid = false;
+  bool exact = false;  // p_value from the exact distribution, not the chi-square approximation
 };
 // Kruskal-Wallis H with the tie correction, df = groups - 1 (empty groups ignored).
 RankTest kruskal_wallis(const std::vector<std::vector<double>>& groups);
 // Friedman's test for k treatments in n blocks: blocks[b][j] is treatment j in block b. With the
-// tie correction; df = k - 1. For paired samples (common random numbers across treatments).
+// tie correction; df = k - 1. For paired samples (common random numbers across treatments). For two
+// treatments the test is the sign test, and p is its exact two-sided binomial value (tied blocks
+// left out): the chi-square approximation errs at small n (4 blocks all one way: 0.046, exact 0.125).
 RankTest friedman(const std::vector<std::vector<double>>& blocks);
 
 // Mid-ranks (1-based, ties share the mean rank) of `values`, and sum of t^3 - t over tie groups.

@@ -193,6 +193,13 @@ TEST(Friedman, TwoTreatmentsEqualSignTest) {
   ASSERT_TRUE(t.valid);
   EXPECT_NEAR(t.statistic, expected, 1e-12);
   EXPECT_EQ(t.df, 1u);
+  // Its p is the sign test's exact one: 5 of 7 up, 2 P(X <= 2), X ~ Bin(7, 1/2) = 2 (1 + 7 + 21) / 128.
+  EXPECT_TRUE(t.exact);
+  EXPECT_NEAR(t.p_value, 58.0 / 128.0, 1e-15);
+  // Four blocks all one way: chi-square 4 would say p = 0.0455; exactly it is 2 / 16. A tied block
+  // carries no sign.
+  EXPECT_NEAR(gd::friedman({{1, 2}, {1, 3}, {0, 5}, {2, 4}, {7, 7}}).p_value, 0.125, 1e-15);
+  EXPECT_NEAR(gd::friedman({{2, 1}, {1, 3}}).p_value, 1.0, 1e-15);
 }
 
 // With ties. Reference: scipy.stats.friedmanchisquare -> 1.7272727272727222, p = 0.42162610548700463.
@@ -201,6 +208,7 @@ TEST(Friedman, TiesAgainstScipy) {
   ASSERT_TRUE(t.valid);
   EXPECT_NEAR(t.statistic, 1.7272727272727222, 1e-12);
   EXPECT_NEAR(t.p_value, 0.42162610548700463, 1e-12);
+  EXPECT_FALSE(t.exact);
   EXPECT_EQ(t.n, 6u);
   EXPECT_FALSE(gd::friedman({{1, 2}}).valid);
   EXPECT_THROW(gd::friedman({{1, 2}, {1, 2, 3}}), std::invalid_argument);
