@@ -28,11 +28,12 @@ std::string median_ci(const BoxStats& b, double scale, int decimals) {
          fixed(b.median_high * scale, decimals) + "]";
 }
 
+// "p = 0.1234", "p < 1e-4" or "p not defined", with "(exact sign test)" where the p is exact.
 std::string p_text(const RankTest& t) {
-  if (!t.valid) return "not defined";
+  if (!t.valid) return "p not defined";
   const std::string exact = t.exact ? " (exact sign test)" : "";
-  if (t.p_value < 1e-4) return "< 1e-4" + exact;
-  return fixed(t.p_value, 4) + exact;
+  if (t.p_value < 1e-4) return "p < 1e-4" + exact;
+  return "p = " + fixed(t.p_value, 4) + exact;
 }
 
 // A value of axis `a` as reports write it: a text axis's label, else the number.
@@ -151,8 +152,8 @@ void write_study_axes(std::ostream& r, const StudyAnalysis& st, const AnalysisSe
  << axis_value(st, axis, first.values[axis], 6) << " to " << median_ci(last.stats.center_distance, U, 3) << " at "
         << axis_value(st, axis, last.values[axis], 6) << " mm·s^-1/2. Friedman's test blocked by realization (the design's common "
         << "random numbers): χ² = " << (l.friedman.valid ? fixed(l.friedman.statistic, 2) : "–") << ", df = "
-        << l.friedman.df << ", " << l.friedman.n << " realizations, p = " << p_text(l.friedman) << "; Kruskal–Wallis: H = "
-        << (l.kruskal_wallis.valid ? fixed(l.kruskal_wallis.statistic, 2) : "–") << ", p = " << p_text(l.kruskal_wallis)
+        << l.friedman.df << ", " << l.friedman.n << " realizations, " << p_text(l.friedman) << "; Kruskal–Wallis: H = "
+        << (l.kruskal_wallis.valid ? fixed(l.kruskal_wallis.statistic, 2) : "–") << ", " << p_text(l.kruskal_wallis)
         << ". ";
       if (!l.friedman.valid) r << "The test is not defined here (too few realizations, or every d tied).\n\n";
       else if (l.friedman.p_value < 1 - s.confidence)
