@@ -8,7 +8,6 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-#include <numeric>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -34,7 +33,8 @@ The defaults come from the package's config/ folder: $GEAR_DYNAMICS_CONFIG_DIR i
 installed share/gear_dynamics/config, else gear_dynamics/config on $ROS_PACKAGE_PATH.
 Snapshot times after run.duration are dropped with a notice (a short --set run.duration run).
 CSV columns (SI): run,t,delta,delta_dot,phi,center_distance; with gear_pair.model = bearings delta is
-the mesh deflection delta_m, followed by delta_t,mesh_force,pinion_fx,pinion_fy,wheel_fx,wheel_fy.
+the mesh deflection delta_m, followed by delta_t,mesh_force,pinion_fx,pinion_fy,wheel_fx,wheel_fy,
+and each run's summary by the window's mean and RMS of the forces [N].
 Summary lines use the paper's units: mm, mm/s, mm s^-1/2.)";
 
 struct Options {
@@ -95,61 +95,17 @@ Options parse(int argc, char** argv) {
   return o;
 }
 
-// The bearings model (doc/model.md §11), one realization after the other: the CSV's columns of the
-// torsional model with delta = delta_m, then the torsional coordinate, the mesh force and the
-// bearing forces; the summary line, then the RMS over the window of F_m and the bearing forces.
-void run_bearings(const gd::ModelConfig& pc, const std::vector<gd::LaneSpec>& lanes,
-                  const std::vector<std::string>& names, std::ostream* csv, double rate) {
-  const gd::GearPair gear = gd::derive(pc.gear);
-  const gd::RunSettings& run = pc.run;
-  const std::int64_t total = run.steps(), window = run.steps_for(run.window);
-  const std::int64_t every = csv ? std::max<std::int64_t>(1, std::llround(1.0 / (rate * run.time_step))) : 0;
-  std::int64_t block = std::gcd(std::max<std::int64_t>(window, 1), total);
-  if (every > 0) block = std::gcd(block, every);
-  const auto start = std::chrono::steady_clock::now();
-  std::vector<std::string> lines;
-  for (std::size_t i = 0; i < lanes.size(); ++i) {
-    gd::BearingsRealization r(gear, run.time_step, pc.initial, lanes[i], pc.seed);
-    gd::WindowRange range(1, window, std::max<std::int64_t>(block, 1));
-    double sum[5] = {}, count = 0.0;
-    const auto observe = [&] {
-      const std::int64_t n = r.step_index();
-      const gd::BearingsOutputs o = r.outputs();
-      double d = o.delta_m, v = o.delta_m_dot;
-      range.observe(n, Eigen::Map<const Eigen::ArrayXd>(&d, 1), Eigen::Map<const Eigen::ArrayXd>(&v, 1));
-      if (n > total - window) {
-        const double f[5] = {o.mesh_force, o.pinion_fx, o.pinion_fy, o.wheel_fx, o.wheel_fy};
-        for (int k = 0; k < 5; ++k) sum[k] += f[k] * f[k];
-        count += 1.0;
-      }
-      if (every > 0 && n % every == 0) {
-        *csv << names[i] << ',' << gd::grid_time(n, run.time_step) << ',' << o.delta_m << ',' << o.delta_m_dot << ','
-             << r.load() << ',' << range.center_distance(0);
-        for (const gd::BearingsOutputSpec& s : gd::kBearingsOutputs) *csv << ',' << o.*s.value;
-        *csv << '\n';
-      }
-    };
-    observe();
-    while (r.step_index() < total) {
-      r.step();
-      observe();
-    }
-    const gd::BearingsOutputs o = r.outputs();
-    const auto rms = [&](int k) { return count > 0 ? std::sqrt(sum[k] / count) : 0.0; };
-    char buf[512];
-    std::snprintf(buf, sizeof buf,
-                  "%s: d = %.6f mm s^-1/2, delta_m(T) = %.6f mm, delta_m_dot(T) = %.4f mm/s, Phi(T) = %.3f mm/s^2, "
-                  "%lld crossings\n  RMS over the window: F_m %.6g N, pinion bearing x %.6g N, y %.6g N, "
-                  "wheel bearing x %.6g N, y %.6g N\n",
-                  names[i].c_str(), 1e3 * range.center_distance(0), 1e3 * o.delta_m, 1e3 * o.delta_m_dot,
-                  1e3 * r.load(), static_cast<long long>(r.crossings()), rms(0), rms(1), rms(2), rms(3), rms(4));
-    lines.push_back(buf);
+// The bearings model's window forces of a run (/gear/bearing_summary's), each mean and RMS [N].
+void print_bearing_forces(const gd::BearingForces& f) {
+  std::printf("  over the window, mean / RMS [N]:");
+  const char* separator = " ";
+  for (const gd::BearingsOutputSpec& s : gd::kBearingsOutputs) {
+    if (!s.window) continue;
+    const gd::ForceStatistics& w = f.*s.window;
+    std::printf("%s%s %.6g / %.6g", separator, s.name, w.mean, w.rms);
+    separator = ", ";
   }
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::printf("# bearings model, mu %.4g, seed %llu, h %g s, T %g s, window %g s, %zu runs in %.3f s wall\n",
-              pc.friction_coefficient, static_cast<unsigned long long>(pc.seed), run.time_step, run.duration,
-              run.window, lanes.size(), wall);
-  for (const std::string& l : lines) std::fputs(l.c_str(), stdout);
+  std::printf("\n");
 }
 
 }  // namespace
@@ -225,19 +181,21 @@ int main(int argc, char** argv) try {
       names.push_back(prefix + "r" + std::to_string(r));
     }
     if (lanes.empty()) throw std::runtime_error("nothing to run: --no-deterministic with --realizations 0");
-    if (pc.gear.model == gd::GearModel::kBearings) {
-      run_bearings(pc, lanes, names, csv, opt.rate);
-      continue;
-    }
-
+    const bool bearings = pc.gear.model == gd::GearModel::kBearings;
     gd::Ensemble ensemble(gd::derive(pc.gear), pc.run.time_step, pc.initial, lanes, pc.seed);
     gd::Recorder recorder;
     if (csv) {
       recorder.every = std::max<std::int64_t>(1, std::llround(1.0 / (opt.rate * pc.run.time_step)));
       recorder.record = [&](const gd::Ensemble& e, const Eigen::ArrayXd& d) {
-        for (int i = 0; i < e.lanes(); ++i)
-          *csv << names[i] << ',' << gd::grid_time(e.step_index(), e.time_step()) << ',' << e.delta()[i] << ',' << e.velocity()[i] << ','
-               << e.load()[i] << ',' << d[i] << '\n';
+        for (int i = 0; i < e.lanes(); ++i) {
+          *csv << names[i] << ',' << gd::grid_time(e.step_index(), e.time_step()) << ',' << e.delta()[i] << ','
+               << e.velocity()[i] << ',' << e.load()[i] << ',' << d[i];
+          if (bearings) {
+            const gd::BearingsOutputs o = gd::bearings_outputs(e, i);
+            for (const gd::BearingsOutputSpec& s : gd::kBearingsOutputs) *csv << ',' << o.*s.value;
+          }
+          *csv << '\n';
+        }
       };
     }
 
@@ -254,6 +212,7 @@ int main(int argc, char** argv) try {
                   names[i].c_str(), 1e3 * r.center_distance, r.steady_state_time,
                   r.reached_steady_state ? "steady" : "not steady", 1e3 * r.final_delta,
                   1e3 * r.final_delta_dot, 1e3 * r.final_load);
+      if (r.bearings) print_bearing_forces(*r.bearings);
     }
   }
   return 0;
