@@ -75,6 +75,8 @@ struct Kernels {
 
 // The variant chosen once per process (GEAR_DYNAMICS_ISA or the best the CPU runs).
 const Kernels& kernels();
+// The variant of `isa`, whether or not this CPU runs it (the tests compare the variants).
+const Kernels& kernels_of(InstructionSet isa);
 
 }  // namespace gear_dynamics::dispatch
 

@@ -81,16 +81,18 @@ std::string instruction_set_description() {
 
 namespace dispatch {
 
+const Kernels& kernels_of(InstructionSet isa) {
+  switch (isa) {
+    case InstructionSet::avx512: return *gd_isa_kernels_avx512();
+    case InstructionSet::avx2: return *gd_isa_kernels_avx2();
+    case InstructionSet::baseline: break;
+  }
+  return *gd_isa_kernels_baseline();
+}
+
 const Kernels& kernels() {
-  static const Kernels* const table = [] {
-    switch (active_instruction_set()) {
-      case InstructionSet::avx512: return gd_isa_kernels_avx512();
-      case InstructionSet::avx2: return gd_isa_kernels_avx2();
-      case InstructionSet::baseline: break;
-    }
-    return gd_isa_kernels_baseline();
-  }();
-  return *table;
+  static const Kernels& table = kernels_of(active_instruction_set());
+  return table;
 }
 
 }  // namespace dispatch

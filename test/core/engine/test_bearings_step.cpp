@@ -20,19 +20,6 @@ namespace gd = gear_dynamics;
 namespace dispatch = gear_dynamics::dispatch;
 using M = gd::BearingsModel;
 
-namespace {
-
-const dispatch::Kernels* table(gd::InstructionSet isa) {
-  switch (isa) {
-    case gd::InstructionSet::avx512: return gd_isa_kernels_avx512();
-    case gd::InstructionSet::avx2: return gd_isa_kernels_avx2();
-    case gd::InstructionSet::baseline: break;
-  }
-  return gd_isa_kernels_baseline();
-}
-
-}  // namespace
-
 TEST(BearingsStep, EveryVariantsLanesAreBearingsStep) {
   const std::string dir = GEAR_DYNAMICS_CONFIG_DIR;
   const gd::ModelConfig c =
@@ -86,7 +73,7 @@ TEST(BearingsStep, EveryVariantsLanesAreBearingsStep) {
                                                   delta.data(),  velocity.data(), load.data(),  mu.data(),
                                                   sigma.data(),  drift.data(),  &z[static_cast<std::size_t>(n) * kLanes],
                                                   kLanes};
-        ASSERT_TRUE(table(isa)->bearings_ensemble_step(step)) << gd::to_string(isa) << " step " << n;
+        ASSERT_TRUE(dispatch::kernels_of(isa).bearings_ensemble_step(step)) << gd::to_string(isa) << " step " << n;
       }
       for (int l = 0; l < kLanes; ++l) {
         M::State got;

@@ -25,15 +25,6 @@ namespace dispatch = gear_dynamics::dispatch;
 
 namespace {
 
-const dispatch::Kernels* table(gd::InstructionSet isa) {
-  switch (isa) {
-    case gd::InstructionSet::avx512: return gd_isa_kernels_avx512();
-    case gd::InstructionSet::avx2: return gd_isa_kernels_avx2();
-    case gd::InstructionSet::baseline: break;
-  }
-  return gd_isa_kernels_baseline();
-}
-
 template <class T>
 bool same_bytes(const std::vector<T>& a, const std::vector<T>& b) {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
@@ -57,7 +48,7 @@ TEST(InstructionSet, NamesParseAndRefuse) {
   EXPECT_EQ(supported.front(), gd::InstructionSet::baseline);  // every x86-64 runs it
   EXPECT_TRUE(gd::cpu_supports(gd::active_instruction_set()));
   // Each table is the variant it names.
-  for (gd::InstructionSet isa : supported) EXPECT_EQ(table(isa)->isa, isa);
+  for (gd::InstructionSet isa : supported) EXPECT_EQ(dispatch::kernels_of(isa).isa, isa);
   std::printf("this CPU runs:");
   for (gd::InstructionSet isa : supported) std::printf(" %s", gd::to_string(isa));
   std::printf("; active %s\n", gd::to_string(gd::active_instruction_set()));
@@ -91,9 +82,9 @@ TEST(InstructionSet, NormalGeneratorVariantsAgree) {
     }
     return std::make_tuple(words, one, eight);
   };
-  const auto reference = run(*table(gd::InstructionSet::baseline));
+  const auto reference = run(dispatch::kernels_of(gd::InstructionSet::baseline));
   for (gd::InstructionSet isa : gd::supported_instruction_sets()) {
-    const auto got = run(*table(isa));
+    const auto got = run(dispatch::kernels_of(isa));
     EXPECT_TRUE(same_bytes(std::get<0>(got), std::get<0>(reference))) << gd::to_string(isa) << ": Philox words";
     EXPECT_TRUE(same_bytes(std::get<1>(got), std::get<1>(reference))) << gd::to_string(isa) << ": one stream";
     EXPECT_TRUE(same_bytes(std::get<2>(got), std::get<2>(reference))) << gd::to_string(isa) << ": 8 lanes";
@@ -145,9 +136,9 @@ TEST(InstructionSet, EnsembleStepVariantsAgree) {
     }
     return s;
   };
-  const Lanes reference = run(*table(gd::InstructionSet::baseline));
+  const Lanes reference = run(dispatch::kernels_of(gd::InstructionSet::baseline));
   for (gd::InstructionSet isa : gd::supported_instruction_sets()) {
-    const Lanes got = run(*table(isa));
+    const Lanes got = run(dispatch::kernels_of(isa));
     EXPECT_TRUE(same_bytes(got.d, reference.d)) << gd::to_string(isa) << ": delta";
     EXPECT_TRUE(same_bytes(got.v, reference.v)) << gd::to_string(isa) << ": delta_dot";
     EXPECT_TRUE(same_bytes(got.load, reference.load)) << gd::to_string(isa) << ": load";
