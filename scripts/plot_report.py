@@ -364,6 +364,42 @@ def poincare_figure(folder, out):
     out(fig, "poincare.png")
 
 
+def bearing_forces_figure(folder, out):
+    """The bearings model's forces: per force, box plots of the runs' RMS over the window, one box
+    per mu or study point (stochastic runs). From bearing_forces.csv; nothing for the torsional model."""
+    if not os.path.exists(os.path.join(folder, "bearing_forces.csv")):
+        return
+    rows = [r for r in read(folder, "bearing_forces.csv") if r["kind"] == "stochastic"]
+    if not rows:
+        return
+    keys = list(rows[0].keys())
+    group_keys = keys[keys.index("kind") + 1:keys.index("force")]  # mu, or point and the axes
+    group_keys = [k for k in group_keys if k != "point"]
+    forces = list(dict.fromkeys(r["force"] for r in rows))
+    groups = list(dict.fromkeys(tuple(r[k] for k in group_keys) for r in rows))
+    rms = {(tuple(r[k] for k in group_keys), r["force"]): [] for r in rows}
+    for r in rows:
+        rms[(tuple(r[k] for k in group_keys), r["force"])].append(float(r["rms[N]"]))
+    symbol = {"mu": "μ", "bearing_damping_ratio": "ζ_b", "bearing_stiffness": "k_b", "initial_mean": "Φ0",
+              "sigma": "σ", "friction_model": "law"}
+    labels = ["\n".join("%s %s" % (symbol.get(k.split(".")[-1], k.split(".")[-1]),
+                                    value_text(float(v)) if is_number(v) else v) for k, v in zip(group_keys, g))
+              for g in groups]
+    fig, axes = plt.subplots(len(forces), 1, figsize=(max(8.0, 0.9 * len(groups) + 2), 2.2 * len(forces)),
+                             sharex=True, squeeze=False)
+    for ax, force in zip(axes[:, 0], forces):
+        data = [rms[(g, force)] for g in groups]
+        ax.boxplot(data, showfliers=False)
+        positive = [v for d in data for v in d if v > 0]
+        if positive and max(positive) > 100 * min(positive):  # the rattle's forces beside contact's
+            ax.set_yscale("log")
+        ax.set_ylabel("%s\nRMS [N]" % force)
+        ax.grid(alpha=0.3)
+    axes[-1, 0].set_xticks(range(1, len(groups) + 1), labels, fontsize=7)
+    fig.suptitle("Mesh and bearing forces (x across, y along the line of action): RMS over the window per run")
+    out(fig, "bearing_forces.png")
+
+
 def axis_columns(points):
     """The axis columns of points.csv: every column between `point` and `R`."""
     keys = list(points[0].keys())
@@ -476,7 +512,7 @@ def main():
     if study:  # a study with more axes than mu: its figures, not the paper's
         draw_in_parallel([lambda: study_figures(args.folder, out), lambda: safety_figure(args.folder, out),
                           lambda: first_passage_figure(args.folder, out), lambda: spectrum_figure(args.folder, out),
-                          lambda: poincare_figure(args.folder, out)])
+                          lambda: poincare_figure(args.folder, out), lambda: bearing_forces_figure(args.folder, out)])
         record_figures(args.folder, inputs, started)
         print("plot_report: study figures written to %s" % args.folder)
         return
@@ -494,6 +530,7 @@ def main():
         lambda: safety_figure(args.folder, out),
         lambda: center_distance_figures(args.folder, out),
         lambda: first_passage_figure(args.folder, out),
+        lambda: bearing_forces_figure(args.folder, out),
     ])
     record_figures(args.folder, inputs, started)
     print("plot_report: figures written to %s" % args.folder)
