@@ -27,6 +27,7 @@ GD_PACKAGES=(
   libeigen3-dev librandom123-dev libtbb-dev libyaml-cpp-dev libgtest-dev libbenchmark-dev libboost-dev libcli11-dev
   python3-matplotlib python3-numpy python3-scipy
   pybind11-dev python3-pybind11 python3-yaml python3-setuptools
+  ccache
 )
 
 gd_install() {
@@ -73,7 +74,7 @@ gd_build() {
     # newer and so rebuilds next time. The stamp of a success comes after it, with the arguments.
     touch "$GD_WS/.gd_build_start"
     (cd "$GD_WS" && catkin_make -DCMAKE_BUILD_TYPE=Release -DPYTHON_EXECUTABLE=/usr/bin/python3 \
-       -j"$(nproc)" "$@")
+       "${gd_launcher[@]}" -j"$(nproc)" "$@")
     echo "$*" > "$GD_WS/.gd_build_done"
   fi
   # shellcheck disable=SC1091
@@ -82,6 +83,15 @@ gd_build() {
 }
 
 gd_install
+# Compiles through ccache: a rebuild, or the build of another clone of the same sources (paths are
+# hashed relative to the workspace), compiles only what changed. The sloppiness lets it cache the
+# compiles that read the test programs' precompiled header. GD_CCACHE=0 compiles directly.
+gd_launcher=(-DCMAKE_C_COMPILER_LAUNCHER= -DCMAKE_CXX_COMPILER_LAUNCHER=)  # CMake's cache keeps the last
+if [ "${GD_CCACHE:-1}" != 0 ] && command -v ccache >/dev/null; then
+  export CCACHE_BASEDIR=$GD_WS CCACHE_NOHASHDIR=1
+  export CCACHE_SLOPPINESS=pch_defines,time_macros,include_file_mtime,include_file_ctime
+  gd_launcher=(-DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+fi
 # GD_BUILD_ARGS: extra catkin_make arguments (CMake options, targets), e.g. from scripts/sanitize.sh.
 read -ra gd_build_args <<< "${GD_BUILD_ARGS:-}"
 gd_build "${gd_build_args[@]}"
