@@ -1,5 +1,6 @@
-// gear_analyze spectrum: the Welch PSDs of delta and of the mesh force of S1 (or of a bag's run)
-// and of stochastic realizations, with the mesh harmonics and the sidebands marked.
+// gear_analyze spectrum: the Welch PSDs of delta and of the mesh force (or, for the bearings model,
+// another output: --signal) of S1 (or of a bag's run) and of stochastic realizations, with the mesh
+// harmonics and the sidebands marked.
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -7,15 +8,18 @@
 #include <cstdio>
 
 #include "common.hpp"
+#include "gear_dynamics/engine/bearings.hpp"
 #include "gear_dynamics/engine/ensemble.hpp"
 #include "gear_dynamics/maths/spectrum.hpp"
 
 namespace gear_dynamics::tools::analyze {
 namespace {
 
-// The sampled series of run 0 (S1, or a bag's run) and of runs 1..R (realizations).
+// The sampled series of run 0 (S1, or a bag's run) and of runs 1..R (realizations): delta, and the
+// second signal (the mesh force unless --signal) whose columns and peaks are named `label`.
 struct SpectrumInput {
   std::vector<std::vector<double>> delta, force;
+  std::string label = "force";
   double fs = 0, fm = 0, transient = 0, duration = 0, mu = 0, wall = 0;
   int k = 1, periods = 1;
   WelchOptions w;
@@ -46,6 +50,10 @@ class Spectrum : public Subcommand {
     app.add_option("--sidebands", sidebands_,
                    "sidebands k = 1..K of the faulty gear's rotation frequency marked around each harmonic")
         ->type_name("K")->check(in_range(0))->capture_default_str();
+    app.add_option("--signal", signal_,
+                   "the second series: mesh_force, or with gear_pair.model = bearings any output of gear_run's "
+                   "CSV (delta_t, pinion_fx, pinion_fy, wheel_fx, wheel_fy)")
+        ->type_name("NAME")->capture_default_str();
     add_bag_option(app, bag_);
   }
   int run(const Common& c) override {
@@ -54,6 +62,8 @@ class Spectrum : public Subcommand {
   }
 
  private:
+  // The bearings model's output --signal names; null for the mesh force. Throws naming the allowed names.
+  const BearingsOutputSpec* second_signal(GearModel model) const;
   SpectrumInput simulate(const Common& c) const;
   SpectrumInput from_bag(const Common& c) const;
   // Default segment: 30 mesh periods, so that every mesh harmonic falls on a bin centre. With a
@@ -69,7 +79,7 @@ class Spectrum : public Subcommand {
   }
   void write_spectra(const Common& c, const SpectrumInput& in) const;
   void write_sidebands(const Common& c, const std::vector<double>& f, const std::vector<double>& d, double fm,
-                       double fr) const;
+                       double fr, const std::string& label) const;
 
   std::optional<double> duration_;
   int realizations_ = 0;
@@ -79,11 +89,27 @@ class Spectrum : public Subcommand {
   double overlap_ = 0.5;
   int harmonics_ = 6;
   int sidebands_ = 3;
+  std::string signal_ = "mesh_force";
   std::string bag_;
 };
 
+const BearingsOutputSpec* Spectrum::second_signal(GearModel model) const {
+  if (signal_ == "mesh_force") return nullptr;
+  const BearingsOutputSpec* output = find_bearings_output(signal_);
+  if (model == GearModel::kBearings && output) return output;
+  std::string allowed = "mesh_force";
+  if (model == GearModel::kBearings)
+    for (const BearingsOutputSpec& o : kBearingsOutputs)
+      if (std::string(o.name) != "mesh_force") allowed += std::string(", ") + o.name;
+  throw std::runtime_error("--signal " + signal_ + " is not an output of the " +
+                           (model == GearModel::kBearings ? "bearings" : "torsional") +
+                           " model (gear_pair.model); allowed: " + allowed +
+                           (output ? " (the bearing outputs need gear_pair.model = bearings)" : ""));
+}
+
 SpectrumInput Spectrum::simulate(const Common& c) const {
   const ModelConfig cfg = load_config(c, duration_);
+  const BearingsOutputSpec* output = second_signal(cfg.gear.model);
   const GearPair g = derive(cfg.gear);
   const int R = realizations_;
   const double transient = transient_, h = cfg.run.time_step;
@@ -111,7 +137,8 @@ SpectrumInput Spectrum::simulate(const Common& c) const {
                      rate = e.mesh().transmission_error_rate(t);
         for (int l = 0; l < last - first; ++l) {
           delta[first + l].push_back(e.delta()[l]);
-          force[first + l].push_back(mesh_force(g, K, e.delta()[l], e.velocity()[l], err, rate));
+          force[first + l].push_back(output ? bearings_outputs(e, l).*output->value
+                                            : mesh_force(g, K, e.delta()[l], e.velocity()[l], err, rate));
         }
       }
       if (n < N) e.step();
@@ -120,12 +147,16 @@ SpectrumInput Spectrum::simulate(const Common& c) const {
   SpectrumInput in;
   in.delta = std::move(delta);
   in.force = std::move(force);
+  if (output) in.label = output->name;
   in.fs = fs, in.fm = fm, in.transient = transient, in.duration = cfg.run.duration, in.mu = cfg.friction_coefficient;
   in.wall = seconds_since(t0), in.k = k, in.periods = periods, in.w = w;
   return in;
 }
 
 SpectrumInput Spectrum::from_bag(const Common& c) const {
+  if (signal_ != "mesh_force")
+    throw std::runtime_error("--signal " + signal_ + " with --bag: a bag's run gives delta and the mesh force; "
+                             "allowed with --bag: mesh_force");
   const BagRun b = load_bag(bag_, c);
   const ModelConfig& cfg = b.config;
   const GearPair g = derive(cfg.gear);
@@ -157,7 +188,7 @@ SpectrumInput Spectrum::from_bag(const Common& c) const {
 // The sidebands of the gear whose teeth differ (f_r its rotation frequency), printed and written
 // as PREFIX_sidebands.csv.
 void Spectrum::write_sidebands(const Common& c, const std::vector<double>& f, const std::vector<double>& d, double fm,
-                               double fr) const {
+                               double fr, const std::string& label) const {
   const int K = sidebands_;
   const auto sb_file = open_csv(c, "sidebands");
   std::ostream& sb = sb_file->out();
@@ -169,8 +200,8 @@ void Spectrum::write_sidebands(const Common& c, const std::vector<double>& f, co
        << (s.line ? 1 : 0) << "\n";
     found += s.line;
   }
-  std::printf("sidebands of the mesh force at n f_m + k f_r (f_r = %.6g Hz, |k| <= %d): %d of %zu are lines\n", fr, K,
-              found, lines.size());
+  std::printf("sidebands of the %s at n f_m + k f_r (f_r = %.6g Hz, |k| <= %d): %d of %zu are lines\n",
+              label == "force" ? "mesh force" : label.c_str(), fr, K, found, lines.size());
 }
 
 // PREFIX_psd.csv, _peaks.csv, _spectrum_info.csv (and _sidebands.csv where the teeth differ).
@@ -194,8 +225,11 @@ void Spectrum::write_spectra(const Common& c, const SpectrumInput& in) const {
   {
     const auto f_file = open_csv(c, "psd");
   std::ostream& f = f_file->out();
-    f << "frequency,delta_S1,force_S1";
-    if (R > 0) f << ",delta_mean,delta_mean_low,delta_mean_high,delta_run_low,delta_run_high,force_mean,force_mean_low,force_mean_high,force_run_low,force_run_high";
+    const std::string& x = in.label;
+    f << "frequency,delta_S1," << x << "_S1";
+    if (R > 0)
+      f << ",delta_mean,delta_mean_low,delta_mean_high,delta_run_low,delta_run_high," << x << "_mean," << x << "_mean_low,"
+        << x << "_mean_high," << x << "_run_low," << x << "_run_high";
     f << "\n";
     PsdBand bd, bf;
     if (R > 0) {
@@ -227,12 +261,12 @@ void Spectrum::write_spectra(const Common& c, const SpectrumInput& in) const {
       }
     };
     emit("delta_S1", s1.frequency, pd[0].density);
-    emit("force_S1", s1.frequency, pf[0].density);
+    emit(in.label + "_S1", s1.frequency, pf[0].density);
     if (R > 0) {
       emit("delta_mean", s1.frequency, bd.mean);
-      emit("force_mean", s1.frequency, bf.mean);
+      emit(in.label + "_mean", s1.frequency, bf.mean);
     }
-    if (periods > 1) write_sidebands(c, s1.frequency, pf[0].density, fm, fm / periods);
+    if (periods > 1) write_sidebands(c, s1.frequency, pf[0].density, fm, fm / periods, in.label);
     const auto meta_file = open_csv(c, "spectrum_info");
   std::ostream& meta = meta_file->out();
     meta << "mesh_frequency,sample_rate,resolution,enbw,segment,overlap,segments,realizations,transient,duration\n"

@@ -1,0 +1,74 @@
+"""gear_analyze spectrum --signal: a bearing force's PSD against scipy's Welch of the same samples
+written by gear_run (an independent implementation), zero across the line of action without
+friction, and the refusals naming the allowed outputs."""
+import csv
+import os
+import subprocess
+
+import numpy as np
+import scipy.signal
+
+from test_gear_dynamics import gear_run_path, read_csv
+
+# The bearings model in contact (1 kN), friction reversing at the pitch point: the force across the
+# line of action is a mesh-frequency square wave of +-mu F_m (doc/bearings_friction.md section 3).
+SETS = ["gear_pair.model=bearings", "load.initial_mean=20000", "gear_pair.friction_direction=reversing",
+        "run.duration=0.2", "run.window=0.05", "run.snapshot_times=[0.2]"]
+TRANSIENT = 0.05  # [s]
+
+
+def sets(extra=()):
+    return sum((["--set", s] for s in list(SETS) + list(extra)), [])
+
+
+def analyze(tmp_path, args):
+    tool = os.path.join(os.path.dirname(gear_run_path()), "gear_analyze")
+    prefix = str(tmp_path / "spectrum")
+    proc = subprocess.run([tool, "spectrum"] + args + ["--output", prefix], capture_output=True, text=True)
+    return proc, prefix
+
+
+def read_rows(path):
+    with open(path) as f:
+        return list(csv.DictReader(f))
+
+
+def test_bearing_force_psd_is_scipy_welch_of_gear_runs_samples(tmp_path):
+    proc, prefix = analyze(tmp_path, sets() + ["--transient", repr(TRANSIENT), "--signal", "pinion_fx"])
+    assert proc.returncode == 0, proc.stderr
+    psd = read_rows(prefix + "_psd.csv")
+    info = read_rows(prefix + "_spectrum_info.csv")[0]
+    fs, segment = float(info["sample_rate"]), int(info["segment"])
+    # gear_run samples the same grid steps (every 10 us from t = 0; the transient ends on one).
+    run = subprocess.run([gear_run_path(), "--realizations", "0", "--rate", repr(fs), "--output",
+                          str(tmp_path / "run.csv")] + sets(), capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    s1 = read_csv(tmp_path / "run.csv")["S1"]
+    x = s1["pinion_fx"][s1["t"] >= TRANSIENT - 1e-9]
+    f, p = scipy.signal.welch(x, fs=fs, window="hann", nperseg=segment, noverlap=segment // 2,
+                              detrend="constant", scaling="density")
+    got = np.array([float(r["pinion_fx_S1"]) for r in psd])
+    np.testing.assert_allclose([float(r["frequency"]) for r in psd], f, rtol=1e-12)
+    # Two FFTs of the same doubles: rounding, relative to the spectrum's peak.
+    np.testing.assert_allclose(got, p, rtol=1e-9, atol=1e-9 * p.max())
+    # The friction force reverses once per mesh period: its first harmonic is a marked line.
+    peaks = read_rows(prefix + "_peaks.csv")
+    first = [r for r in peaks if r["series"] == "pinion_fx_S1" and r["harmonic"] == "1" and r["is_harmonic"] == "1"]
+    assert first, "no line at the mesh frequency in the pinion's x force"
+
+
+def test_no_force_across_the_line_of_action_without_friction(tmp_path):
+    proc, prefix = analyze(tmp_path, sets(["gear_pair.friction_coefficient=0"]) +
+                           ["--transient", repr(TRANSIENT), "--signal", "wheel_fx"])
+    assert proc.returncode == 0, proc.stderr
+    assert all(float(r["wheel_fx_S1"]) == 0.0 for r in read_rows(prefix + "_psd.csv"))
+
+
+def test_signal_refusals_name_the_allowed_outputs(tmp_path):
+    proc, _ = analyze(tmp_path, ["--signal", "pinion_fx", "--duration", "0.2"])
+    assert proc.returncode != 0
+    assert "--signal pinion_fx is not an output of the torsional model" in proc.stderr
+    assert "allowed: mesh_force" in proc.stderr
+    proc, _ = analyze(tmp_path, sets() + ["--signal", "pinion_f"])
+    assert proc.returncode != 0
+    assert "allowed: mesh_force, delta_t, pinion_fx, pinion_fy, wheel_fx, wheel_fy" in proc.stderr
