@@ -72,3 +72,30 @@ def test_signal_refusals_name_the_allowed_outputs(tmp_path):
     proc, _ = analyze(tmp_path, sets() + ["--signal", "pinion_f"])
     assert proc.returncode != 0
     assert "allowed: mesh_force, delta_t, pinion_fx, pinion_fy, wheel_fx, wheel_fy" in proc.stderr
+
+
+def test_poincare_of_the_bearings_model_samples_its_mesh_deflection(tmp_path):
+    """The section of S1 at mesh phase 0 is gear_run's (delta_m, delta_m_dot) at those grid times,
+    bit for bit; the torsional model's section there differs (the bodies move on their bearings)."""
+    tool = os.path.join(os.path.dirname(gear_run_path()), "gear_analyze")
+    sections = {}
+    for model in ("bearings", "torsional"):
+        prefix = str(tmp_path / model)
+        proc = subprocess.run([tool, "poincare", "--set", "gear_pair.model=" + model, "--set", "load.initial_mean=20000",
+                               "--duration", "0.06", "--transient", "0.02", "--phases", "1", "--output", prefix],
+                              capture_output=True, text=True)
+        assert proc.returncode == 0, proc.stderr
+        sections[model] = [r for r in read_rows(prefix + "_poincare.csv") if r["set"] == "S1"]
+    run = subprocess.run([gear_run_path(), "--realizations", "0", "--rate", "1000", "--output", str(tmp_path / "run.csv"),
+                          "--set", "gear_pair.model=bearings", "--set", "load.initial_mean=20000",
+                          "--set", "run.duration=0.06", "--set", "run.window=0.01", "--set", "run.snapshot_times=[0.06]"],
+                         capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    s1 = read_csv(tmp_path / "run.csv")["S1"]
+    assert len(sections["bearings"]) >= 10
+    for p in sections["bearings"]:
+        assert p["on_grid"] == "1"
+        i = int(np.argmin(np.abs(s1["t"] - float(p["t"]))))
+        assert abs(s1["t"][i] - float(p["t"])) < 1e-9
+        assert float(p["delta"]) == s1["delta"][i] and float(p["delta_dot"]) == s1["delta_dot"][i], p
+    assert [p["delta"] for p in sections["bearings"]] != [p["delta"] for p in sections["torsional"]]

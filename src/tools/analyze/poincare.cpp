@@ -1,5 +1,6 @@
 // gear_analyze poincare: (delta, delta_dot) once per mesh period at mesh phase 0, of S1, the phase
-// ensemble and stochastic realizations (or of a bag's run), and S1's period.
+// ensemble and stochastic realizations (or of a bag's run), and S1's period. For the bearings model
+// (delta, delta_dot) are the mesh deflection delta_m and its rate.
 #include <tbb/parallel_for.h>
 
 #include <cmath>
@@ -55,9 +56,16 @@ int Poincare::simulate(const Common& c) const {
   tbb::parallel_for(0, P, [&](int j) {
     GearInputs gi = cfg.gear;
     gi.mesh_phase = j * g.mesh_period_angle / P;
-    GearLanes sys({GearLaneSpec{gi, cfg.friction_coefficient, cfg.load.initial_mean, cfg.initial}}, h);
     const double offset = first_mesh_period_start(derive(gi));  // as the batch's /gear/poincare
-    ph[j] = poincare_section(sys, {Tm, offset, transient, cfg.run.duration, {}});
+    const PoincareOptions section{Tm, offset, transient, cfg.run.duration, {}};
+    if (cfg.gear.model == GearModel::kBearings) {  // the engine's lanes: delta_m and its rate
+      Ensemble e(derive(gi), h, cfg.initial, {deterministic_lane(cfg, cfg.friction_coefficient)}, cfg.seed);
+      EnsembleLanes sys(e);
+      ph[j] = poincare_section(sys, section);
+    } else {
+      GearLanes sys({GearLaneSpec{gi, cfg.friction_coefficient, cfg.load.initial_mean, cfg.initial}}, h);
+      ph[j] = poincare_section(sys, section);
+    }
   });
   std::vector<SectionState> st;
   if (R > 0) {
