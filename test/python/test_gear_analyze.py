@@ -99,3 +99,14 @@ def test_poincare_of_the_bearings_model_samples_its_mesh_deflection(tmp_path):
         assert abs(s1["t"][i] - float(p["t"])) < 1e-9
         assert float(p["delta"]) == s1["delta"][i] and float(p["delta_dot"]) == s1["delta_dot"][i], p
     assert [p["delta"] for p in sections["bearings"]] != [p["delta"] for p in sections["torsional"]]
+
+
+def test_two_state_subcommands_refuse_the_bearings_model(tmp_path):
+    """lyapunov and bifurcation run the dynamics layer's torsional systems: they refuse the bearings
+    model by name instead of analysing the torsional one in its place."""
+    tool = os.path.join(os.path.dirname(gear_run_path()), "gear_analyze")
+    for args in (["lyapunov"], ["bifurcation", "--from", "500", "--to", "600"]):
+        proc = subprocess.run([tool] + args + ["--set", "gear_pair.model=bearings", "--output", str(tmp_path / "x")],
+                              capture_output=True, text=True)
+        assert proc.returncode != 0
+        assert "gear_analyze %s takes gear_pair.model = torsional only (given: bearings)" % args[0] in proc.stderr

@@ -86,6 +86,7 @@ class Lyapunov : public Subcommand {
 
 int Lyapunov::run(const Common& common) {
   const ModelConfig c = load_config(common);
+  require_torsional(c, name());
   const double h = c.run.time_step / step_divisor_;
   const LyapunovRuns r = runs(c);
   return method_ == "tangent" ? tangent(common, c, h, r) : pairs(common, c, h, r);
