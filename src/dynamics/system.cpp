@@ -4,9 +4,20 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "gear_dynamics/engine/bearings.hpp"
 #include "gear_dynamics/engine/rk4_kernel.hpp"
 
 namespace gear_dynamics {
+
+BearingsLanes::BearingsLanes(Ensemble& ensemble) : e_(ensemble) {
+  if (!ensemble.bearings_model())
+    throw std::invalid_argument("BearingsLanes: the ensemble runs gear_pair.model = torsional; allowed: bearings");
+}
+
+int BearingsLanes::dimension() const { return BearingsModel::kStates; }
+
+// Each displacement's rate follows it in BearingsModel::Index (delta, delta_dot, x_p, x_p_dot, ...).
+int BearingsLanes::derivative_of(int c) const { return c % 2 == 0 ? c + 1 : -1; }
 
 GearLanes::GearLanes(const std::vector<GearLaneSpec>& lanes, double time_step) : h_(time_step) {
   if (lanes.empty()) throw std::invalid_argument("GearLanes: needs at least one lane");

@@ -90,6 +90,17 @@ void Ensemble::set_load(int lane, double load) {
   load_[lane] = load;
 }
 
+void Ensemble::set_model_state(int lane, const double* state) {
+  if (lane < 0 || lane >= lanes()) throw std::out_of_range("Ensemble::set_model_state: no such lane");
+  if (!bearings_)
+    throw std::invalid_argument("Ensemble::set_model_state: the torsional model's state is (delta, delta_dot); "
+                                "use set_state");
+  const BearingsModel::State y = Eigen::Map<const BearingsModel::State>(state);
+  model_state_.col(lane) = y;
+  delta_[lane] = bearings_->deflection(y);
+  velocity_[lane] = bearings_->deflection_rate(y);
+}
+
 void Ensemble::set_state(int lane, double delta, double velocity) {
   if (lane < 0 || lane >= lanes()) throw std::out_of_range("Ensemble::set_state: no such lane");
   if (bearings_)

@@ -38,6 +38,24 @@ class LaneSystem {
 
 // The production engine as a LaneSystem. Only deterministic lanes (LaneSpec::stochastic = false)
 // make a deterministic system; stochastic lanes step too but are not meant for Lyapunov exponents.
+// The bearings model's lanes of an Ensemble (gear_pair.model = bearings) with their whole state,
+// BearingsModel::State's ten components: the largest Lyapunov exponent of the full state.
+class BearingsLanes : public LaneSystem {
+ public:
+  explicit BearingsLanes(Ensemble& ensemble);  // throws unless the ensemble runs the bearings model
+  int dimension() const override;
+  int lanes() const override { return e_.lanes(); }
+  double time_step() const override { return e_.time_step(); }
+  std::int64_t step_index() const override { return e_.step_index(); }
+  void step() override { e_.step(); }
+  double state(int lane, int c) const override { return e_.model_state()(c, lane); }
+  void set_state(int lane, const double* x) override { e_.set_model_state(lane, x); }
+  int derivative_of(int c) const override;
+
+ private:
+  Ensemble& e_;
+};
+
 class EnsembleLanes : public LaneSystem {
  public:
   explicit EnsembleLanes(Ensemble& ensemble) : e_(ensemble) {}

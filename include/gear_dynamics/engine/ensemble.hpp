@@ -104,6 +104,9 @@ class Ensemble {
   // are left alone (the two-trajectory Lyapunov method, doc/nonlinear-dynamics.md §4). Torsional
   // model only (the bearings model's state is not (delta, delta_dot)).
   void set_state(int lane, double delta, double velocity);
+  // gear_pair.model = bearings: lane's whole state, BearingsModel::kStates values in its Index order
+  // (delta and delta_dot follow as delta_m and its rate). Throws for the torsional model.
+  void set_model_state(int lane, const double* state);
 
  private:
   void refill_normals(std::uint64_t first_index);

@@ -9,6 +9,7 @@
 #include "common.hpp"
 #include "gear_dynamics/dynamics/bifurcation.hpp"
 #include "gear_dynamics/dynamics/lyapunov.hpp"
+#include "gear_dynamics/engine/bearings.hpp"
 
 namespace gear_dynamics::tools::analyze {
 namespace {
@@ -86,7 +87,9 @@ class Lyapunov : public Subcommand {
 
 int Lyapunov::run(const Common& common) {
   const ModelConfig c = load_config(common);
-  require_torsional(c, name());
+  if (c.gear.model == GearModel::kBearings && method_ == "tangent")
+    throw std::runtime_error("gear_analyze lyapunov --method tangent takes gear_pair.model = torsional only (given: "
+                             "bearings); --method pairs gives the bearings model's largest exponent of its whole state");
   const double h = c.run.time_step / step_divisor_;
   const LyapunovRuns r = runs(c);
   return method_ == "tangent" ? tangent(common, c, h, r) : pairs(common, c, h, r);
@@ -205,7 +208,8 @@ int Lyapunov::tangent(const Common& common, const ModelConfig& c, double h, cons
 // The largest exponent from two trajectories per run (the cross-check of the tangent method).
 int Lyapunov::pairs(const Common& common, const ModelConfig& c, double h, const LyapunovRuns& runs) const {
   const int M = step_divisor_;
-  const double b = c.gear.backlash;
+  const double b = c.gear.backlash, v_ref = std::sqrt(2.0 * std::abs(c.load.initial_mean) * b);
+  const bool bearings = c.gear.model == GearModel::kBearings;
   LyapunovOptions lo;
   lo.transient = transient_;
   lo.duration = duration_ - lo.transient;
@@ -222,9 +226,22 @@ int Lyapunov::pairs(const Common& common, const ModelConfig& c, double h, const 
       lanes.push_back(runs.specs[i]);
       lanes.push_back(runs.specs[i]);
     }
-    GearLanes sys(lanes, h);
     LyapunovOptions l = lo;
-    l.scale = {b, std::sqrt(2.0 * std::abs(c.load.initial_mean) * b)};
+    l.scale = {b, v_ref};
+    if (bearings) {  // one ensemble per run (its gear), a pair of lanes, the whole ten-state state
+      l.scale.clear();
+      for (int k = 0; k < BearingsModel::kStates; ++k) l.scale.push_back(k % 2 == 0 ? b : v_ref);
+      for (int i = blk * per; i < std::min(n, blk * per + per); ++i) {
+        const GearLaneSpec& s = runs.specs[i];
+        LaneSpec lane;
+        lane.mu = s.mu, lane.load_mean = s.load, lane.stochastic = false;
+        Ensemble e(derive(s.gear), h, s.initial, {lane, lane}, c.seed);
+        BearingsLanes sys(e);
+        res[i] = largest_lyapunov(sys, l).front();
+      }
+      return;
+    }
+    GearLanes sys(lanes, h);
     const auto r = largest_lyapunov(sys, l);
     for (std::size_t k = 0; k < r.size(); ++k) res[blk * per + k] = r[k];
   });
@@ -241,10 +258,10 @@ int Lyapunov::pairs(const Common& common, const ModelConfig& c, double h, const 
   write_running(common, runs, res);
   double gmax = -1e300, gmin = 1e300;
   for (const auto& r : res) { gmax = std::max(gmax, r.max_log_growth); gmin = std::min(gmin, r.min_log_growth); }
-  std::printf("# lyapunov (pairs): h %g s, transient %g s, averaged over %g s, renormalised every %lld steps (%g s), d0 %g "
+  std::printf("# lyapunov (pairs, %s): h %g s, transient %g s, averaged over %g s, renormalised every %lld steps (%g s), d0 %g "
               "(units b = %g m, v_ref = %g m/s), mu %g, %d %s, %.1f s wall\n",
-              h, lo.transient, lo.duration, static_cast<long long>(lo.renormalise_every), lo.renormalise_every * h,
-              lo.separation, b, std::sqrt(2.0 * c.load.initial_mean * b), c.friction_coefficient, n, runs.what.c_str(), wall);
+              bearings ? "bearings model, its 10 states" : "torsional model", h, lo.transient, lo.duration, static_cast<long long>(lo.renormalise_every), lo.renormalise_every * h,
+              lo.separation, b, v_ref, c.friction_coefficient, n, runs.what.c_str(), wall);
   print_box("largest exponent [1/s]", ex);
   std::printf("ln(d/d0) per renormalisation interval: min %.3g, max %.3g\n", gmin, gmax);
   return 0;
