@@ -376,10 +376,10 @@ def bearing_forces_figure(folder, out):
     group_keys = keys[keys.index("kind") + 1:keys.index("force")]  # mu, or point and the axes
     group_keys = [k for k in group_keys if k != "point"]
     forces = list(dict.fromkeys(r["force"] for r in rows))
-    groups = list(dict.fromkeys(tuple(r[k] for k in group_keys) for r in rows))
-    rms = {(tuple(r[k] for k in group_keys), r["force"]): [] for r in rows}
+    rms = {}  # (group, force) -> the runs' RMS, in the file's order
     for r in rows:
-        rms[(tuple(r[k] for k in group_keys), r["force"])].append(float(r["rms[N]"]))
+        rms.setdefault((tuple(r[k] for k in group_keys), r["force"]), []).append(float(r["rms[N]"]))
+    groups = list(dict.fromkeys(g for g, _ in rms))
     symbol = {"mu": "μ", "bearing_damping_ratio": "ζ_b", "bearing_stiffness": "k_b", "initial_mean": "Φ0",
               "sigma": "σ", "friction_model": "law"}
     labels = ["\n".join("%s %s" % (symbol.get(k.split(".")[-1], k.split(".")[-1]),

@@ -9,7 +9,6 @@
 #include "common.hpp"
 #include "gear_dynamics/dynamics/bifurcation.hpp"
 #include "gear_dynamics/dynamics/lyapunov.hpp"
-#include "gear_dynamics/engine/bearings.hpp"
 
 namespace gear_dynamics::tools::analyze {
 namespace {
@@ -229,14 +228,14 @@ int Lyapunov::pairs(const Common& common, const ModelConfig& c, double h, const 
     LyapunovOptions l = lo;
     l.scale = {b, v_ref};
     if (bearings) {  // one ensemble per run (its gear), a pair of lanes, the whole ten-state state
-      l.scale.clear();
-      for (int k = 0; k < BearingsModel::kStates; ++k) l.scale.push_back(k % 2 == 0 ? b : v_ref);
       for (int i = blk * per; i < std::min(n, blk * per + per); ++i) {
         const GearLaneSpec& s = runs.specs[i];
         LaneSpec lane;
         lane.mu = s.mu, lane.load_mean = s.load, lane.stochastic = false;
         Ensemble e(derive(s.gear), h, s.initial, {lane, lane}, c.seed);
         BearingsLanes sys(e);
+        l.scale.clear();  // displacements in b, their rates in v_ref
+        for (int k = 0; k < sys.dimension(); ++k) l.scale.push_back(sys.derivative_of(k) >= 0 ? b : v_ref);
         res[i] = largest_lyapunov(sys, l).front();
       }
       return;
