@@ -95,6 +95,31 @@ def our_processes(markers, before):
     return found
 
 
+def task_pids(job, task_id):
+    """The processes of array task job_task_id on this machine: those whose environment names it."""
+    wanted = (b"SLURM_ARRAY_JOB_ID=%s\0" % job.encode(), b"SLURM_ARRAY_TASK_ID=%d\0" % task_id)
+    pids = set()
+    for pid in os.listdir("/proc"):
+        if not pid.isdigit():
+            continue
+        try:
+            with open("/proc/%s/environ" % pid, "rb") as f:
+                env = b"\0" + f.read()
+        except OSError:
+            continue
+        if all(b"\0" + w in env for w in wanted):
+            pids.add(int(pid))
+    return pids
+
+
+def signal_all(pids, sig):
+    for pid in pids:
+        try:
+            os.kill(pid, sig)
+        except ProcessLookupError:
+            pass
+
+
 def slurmstepd_pids():
     pids = set()
     for pid in os.listdir("/proc"):
@@ -391,10 +416,29 @@ def main():
                     time.sleep(0.2)
                     return cluster.states(job).get(task, "PENDING") != "PENDING"
                 fl.wait_until(started, 300, "task %s to start" % task)
-                fl.wait_until(some_bags, 120, "task %s to write some bags" % task)
+                # On a fast machine the shard's bags follow each other faster than a poll and
+                # scancel's round trip: the task runs in short slices between SIGSTOPs, and is
+                # looked at and cancelled only while stopped.
+                pids = set()
+
+                def found_pids():
+                    pids.update(task_pids(job, CANCELLED_TASK))
+                    return bool(pids)
+                fl.wait_until(found_pids, 60, "task %s's processes" % task)
+                signal_all(pids, signal.SIGSTOP)
+                deadline = time.time() + 120
+                while not some_bags():
+                    assert time.time() < deadline, "task %s wrote no bag in 120 s of slices" % task
+                    pids.update(task_pids(job, CANCELLED_TASK))
+                    signal_all(pids, signal.SIGCONT)
+                    time.sleep(0.02)
+                    signal_all(pids, signal.SIGSTOP)
             except AssertionError as e:
                 raise AssertionError("%s\n%s" % (e, cluster.diagnosis(job, logs)))
             cluster.out(["scancel", task])
+            # slurmstepd sends SIGCONT before SIGTERM; sent here too, once the cancel is recorded.
+            fl.wait_until(lambda: cluster.states(job).get(task) != "RUNNING", 60, "task %s to leave RUNNING" % task)
+            signal_all(pids, signal.SIGCONT)
             states = cluster.wait_ended(job, 120)
             agg_states = cluster.wait_ended(agg, 60)
             files, complete = shard_files(output, CANCELLED_TASK)
