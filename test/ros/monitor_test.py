@@ -14,14 +14,13 @@ import tempfile
 import time
 import unittest
 
-import rosgraph
 import rospkg
 import rospy
 import rostest
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from gear_dynamics.msg import GearIndicators
 
-from simtest import Collector, services, wait_until
+from simtest import Collector, links_to, services, wait_until
 
 PKG = rospkg.RosPack().get_path('gear_dynamics')
 HEALTHY_YAML = os.path.join(PKG, 'test', 'ros', 'monitor_healthy.yaml')
@@ -62,20 +61,26 @@ class Monitor(unittest.TestCase):
 
             for c in indicators.values():
                 c.wait_connected(timeout=30.0)
-            # Each monitor subscribed to its simulator before the run starts: the windows are then
-            # those of simulate_windows on the same stream.
-            master = rosgraph.Master('/monitor_test')
-
-            def subscribed(ns):
-                subscribers = dict(master.getSystemState()[1]).get('/%s/state_batch' % ns, [])
-                return '/%s/gear_monitor' % ns in subscribers
+            # Each monitor connected to its simulator before the run starts (the simulator's own
+            # links, not the master's list): the windows are then those of simulate_windows on the
+            # same stream.
             for ns in ('healthy', 'cracked'):
-                wait_until(lambda: subscribed(ns), 30.0, '/%s/gear_monitor on /%s/state_batch' % (ns, ns))
+                wait_until(lambda: links_to('/%s/gear_simulator' % ns, '/%s/gear_monitor' % ns, '/%s/state_batch' % ns),
+                           30.0, '/%s/gear_simulator linked to /%s/gear_monitor on state_batch' % (ns, ns))
             for ns in ('healthy', 'cracked'):
                 services('/%s/gear_simulator' % ns)['unpause']()
 
             got = {ns: indicators[ns].wait_for(lambda m: len(m) >= WINDOWS, 120.0, '%d windows' % WINDOWS)
                    for ns in ('healthy', 'cracked')}
+            def statuses(ns):
+                return [s for a in diagnostics.messages() for s in a.status
+                        if s.name.lstrip('/').startswith('%s/gear_monitor:' % ns)]
+
+            def gaps(ns):  # the monitor's count of lost states (its windows restart at each)
+                return [kv.value for s in statuses(ns)[-1:] for kv in s.values if kv.key.startswith('gaps in the input')]
+            for ns in ('healthy', 'cracked'):
+                wait_until(lambda: gaps(ns), 10.0, ns + ' diagnostics')
+                self.assertEqual(gaps(ns), ['0'], '%s: states were lost between the simulator and the monitor' % ns)
             # The live windows are simulate_windows' on the same stream: the node samples the
             # simulator's states at the reference's grid steps, at the engine's angle, and the
             # states are the engine's bit for bit (test_realization); 1e-12 leaves room for
@@ -105,10 +110,6 @@ class Monitor(unittest.TestCase):
             self.assertIsNotNone(first_error, [(m.window, m.level, m.t2, m.cusum) for m in cracked])
             self.assertLessEqual(first_error, ERROR_BY)
             self.assertTrue(all(m.reported_level == DiagnosticStatus.ERROR for m in cracked[first_error - 1:]))
-
-            def statuses(ns):
-                return [s for a in diagnostics.messages() for s in a.status
-                        if s.name.lstrip('/').startswith('%s/gear_monitor:' % ns)]
 
             # Input stops at t_end: STALE within the 2 s timeout and the 0.5 s diagnostics period.
             for ns in ('healthy', 'cracked'):

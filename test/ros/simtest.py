@@ -78,6 +78,17 @@ def wait_until(predicate, timeout, what):
         time.sleep(0.01)
 
 
+def links_to(publisher, subscriber, topic):
+    """Whether `publisher`'s own list of links (XML-RPC getBusInfo) holds a connected link to
+    `subscriber` on `topic`: the master lists a subscriber before the connection exists."""
+    master = rosgraph.Master(rospy.get_name())
+    try:
+        _, _, links = xmlrpc.client.ServerProxy(master.lookupNode(publisher)).getBusInfo(rospy.get_name())
+    except (OSError, xmlrpc.client.Error, rosgraph.MasterError):
+        return False
+    return any(l[1] == subscriber and l[2] == 'o' and l[4] == topic and l[5] for l in links)
+
+
 def services(node):
     """The node's ~pause, ~unpause, ~reset (std_srvs/Empty) and ~step (std_srvs/Trigger)."""
     proxies = {}
