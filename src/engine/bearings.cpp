@@ -123,14 +123,18 @@ BearingsOutputs bearings_outputs(const BearingsModel& model, const GearPair& gea
   const double e = mesh.transmission_error(t);
   // The rate the stepping integrates e with (the table's slope), so F_m is the force of the derivative.
   const double e_dot = mesh.transmission_error_rate(t);
+  return bearings_outputs(model, gear, model_step::MeshPoint{mesh.stiffness(t), 0.0, 0.0, 0.0, e, e_dot}, y);
+}
+
+BearingsOutputs bearings_outputs(const BearingsModel& model, const GearPair& gear, const model_step::MeshPoint& p,
+                                 const BearingsModel::State& y) {
   const double dm = model.deflection(y);
-  model_step::MeshPoint p{mesh.stiffness(t), 0.0, 0.0, 0.0, e, e_dot};
   const BearingParameters& b = model.bearings();
   using M = BearingsModel;
   return {dm,
           model.deflection_rate(y),
           y[M::kDelta],
-          model.mesh_force(model_step::branch_of(dm, e, gear.in.backlash), y, p),
+          model.mesh_force(model_step::branch_of(dm, p.error, gear.in.backlash), y, p),
           b.stiffness * y[M::kPinionX] + b.pinion_damping * y[M::kPinionXDot],
           b.stiffness * y[M::kPinionY] + b.pinion_damping * y[M::kPinionYDot],
           b.stiffness * y[M::kWheelX] + b.wheel_damping * y[M::kWheelXDot],

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <set>
 #include <sstream>
 
 #include <boost/math/distributions/fisher_f.hpp>
@@ -46,12 +47,50 @@ ModelConfig healthy_of(ModelConfig config) {
 
 }  // namespace
 
-const char* to_string(MonitoredSignal signal) { return signal == MonitoredSignal::kDelta ? "delta" : "mesh_force"; }
+const std::vector<MonitoredSignalSpec>& monitored_signals() {
+  using S = MonitoredSignal;
+  using O = BearingsOutputs;
+  static const std::vector<MonitoredSignalSpec> table = {
+      {S::kDelta, "delta", "m", "the mesh deflection (delta_m in the bearings model)", nullptr, nullptr, false},
+      {S::kMeshForce, "mesh_force", "N", "the mesh force F_m", nullptr, nullptr, false},
+      {S::kPinionFx, "pinion_fx", "N", "the pinion's bearing force across the line of action (friction)",
+       &O::pinion_fx, "pinion_bearing/wrench", true},
+      {S::kPinionFy, "pinion_fy", "N", "the pinion's bearing force along the line of action", &O::pinion_fy,
+       "pinion_bearing/wrench", false},
+      {S::kWheelFx, "wheel_fx", "N", "the wheel's bearing force across the line of action (friction)",
+       &O::wheel_fx, "wheel_bearing/wrench", true},
+      {S::kWheelFy, "wheel_fy", "N", "the wheel's bearing force along the line of action", &O::wheel_fy,
+       "wheel_bearing/wrench", false},
+  };
+  return table;
+}
 
-MonitoredSignal parse_monitored_signal(const std::string& text) {
-  if (text == "delta") return MonitoredSignal::kDelta;
-  if (text == "mesh_force") return MonitoredSignal::kMeshForce;
-  throw std::invalid_argument("monitor.signal = " + text + " is not allowed; allowed: delta, mesh_force");
+const MonitoredSignalSpec& signal_spec(MonitoredSignal signal) {
+  const auto& table = monitored_signals();
+  const auto i = static_cast<std::size_t>(signal);
+  if (i >= table.size() || table[i].signal != signal) throw std::logic_error("monitored_signals(): out of the enum's order");
+  return table[i];
+}
+
+const char* to_string(MonitoredSignal signal) { return signal_spec(signal).name; }
+
+MonitoredSignal parse_monitored_signal(const std::string& text, const std::string& key) {
+  std::string names;
+  for (const MonitoredSignalSpec& s : monitored_signals()) {
+    if (text == s.name) return s.signal;
+    names += (names.empty() ? "" : ", ") + std::string(s.name);
+  }
+  throw std::invalid_argument(key + " = " + text + " is not allowed; allowed: " + names);
+}
+
+void require_signal(MonitoredSignal signal, GearModel model) {
+  const MonitoredSignalSpec& s = signal_spec(signal);
+  if (!s.bearing_force || model == GearModel::kBearings) return;
+  std::string names;
+  for (const MonitoredSignalSpec& o : monitored_signals())
+    if (!o.bearing_force) names += (names.empty() ? "" : ", ") + std::string(o.name);
+  throw std::invalid_argument(std::string("monitor.signal = ") + s.name +
+                              " is an output of gear_pair.model = bearings; the torsional model gives: " + names);
 }
 
 const char* to_string(Health health) {
@@ -99,16 +138,20 @@ IndicatorSettings indicator_settings(const GearPair& gear, const MonitorSettings
   return s;
 }
 
-double monitored_signal(const GearPair& gear, const MeshSchedule& mesh, MonitoredSignal signal, double t,
-                        double stiffness, double delta, double delta_dot) {
+double state_signal(const GearPair& gear, MonitoredSignal signal, double stiffness, double error, double error_rate,
+                    double delta, double delta_dot) {
   if (signal == MonitoredSignal::kDelta) return delta;
-  return mesh_force(gear, stiffness, delta, delta_dot, mesh.transmission_error(t), mesh.transmission_error_rate(t));
+  if (signal == MonitoredSignal::kMeshForce) return mesh_force(gear, stiffness, delta, delta_dot, error, error_rate);
+  throw std::invalid_argument(std::string("state_signal: ") + to_string(signal) +
+                              " is not a state's signal (the bearings outputs or its wrench hold it)");
 }
 
 std::vector<std::vector<RevolutionWindow>> simulate_windows(const ModelConfig& config, const MonitorSettings& m,
                                                             std::uint64_t first, int count, double warmup,
                                                             int windows) {
+  require_signal(m.signal, config.gear.model);
   const GearPair gear = derive(config.gear);
+  const MonitoredSignalSpec& spec = signal_spec(m.signal);
   const double revolution = revolution_angle(gear, m.gear);
   const double h = config.run.time_step, omega = gear.in.pinion_speed;
   // The last window ends (revolutions counted from the first aligned start after the warm-up).
@@ -133,12 +176,17 @@ std::vector<std::vector<RevolutionWindow>> simulate_windows(const ModelConfig& c
       const std::int64_t k = ensemble.step_index();
       if (k < first_recorded || k % m.decimation != 0) continue;
       const double t = ensemble.time(), angle = shaft_angle(gear, t);
-      const double k_t = ensemble.mesh().stiffness(t);  // the block's, not a lane's
+      // The mesh at t is the block's, not a lane's: looked up once for all lanes.
+      const model_step::MeshPoint mesh{ensemble.mesh().stiffness(t), 0.0, 0.0, 0.0,
+                                       ensemble.mesh().transmission_error(t), ensemble.mesh().transmission_error_rate(t)};
       for (int i = 0; i < lanes; ++i) {
         auto& mine = out[b0 + i];
         if (static_cast<int>(mine.size()) >= windows) continue;
-        const double value = monitored_signal(gear, ensemble.mesh(), m.signal, t, k_t, ensemble.padded_delta()(i),
-                                              ensemble.padded_velocity()(i));
+        const double value =
+            spec.bearing_force
+                ? bearings_outputs(*ensemble.bearings_model(), gear, mesh, ensemble.model_state().col(i)).*spec.bearing_force
+                : state_signal(gear, m.signal, mesh.stiffness, mesh.error, mesh.error_rate, ensemble.padded_delta()(i),
+                               ensemble.padded_velocity()(i));
         if (auto w = cut[i].add(angle, value, ensemble.load()(i))) mine.push_back(std::move(*w));
       }
     }
@@ -248,8 +296,10 @@ Reference build_reference(const ModelConfig& model, const ReferenceSettings& set
         rows.push_back(tracker.window(w.tsa));
         for (std::size_t i = 0; i < p; ++i)
           if (!std::isfinite(rows.back()[i]))
-            throw std::runtime_error("build_reference: indicator " + ref.indicators[i] +
-                                     " is not finite on a healthy window (a constant signal?)");
+            throw std::runtime_error("build_reference: indicator " + ref.indicators[i] + " of monitor.signal = " +
+                                     to_string(settings.monitor.signal) +
+                                     " is not finite on a healthy window (a constant signal: across the line of "
+                                     "action, a bearing force is 0 at gear_pair.friction_coefficient = 0)");
       }
     }
     const double n = static_cast<double>(rows.size());
@@ -496,11 +546,16 @@ Reference read_reference(const std::string& path) {
 void check_reference(const Reference& ref, const ModelConfig& monitored, const std::string& path) {
   const YAML::Node mine = to_yaml(monitored)["gear_pair"];
   const YAML::Node theirs = ref.config["gear_pair"];
-  for (const auto& kv : mine) {
-    const auto key = kv.first.as<std::string>();
+  // Keys of either side: to_yaml leaves out some at their defaults (the model's, when torsional).
+  std::set<std::string> keys;
+  for (const YAML::Node& side : {mine, theirs})
+    for (const auto& kv : side) keys.insert(kv.first.as<std::string>());
+  for (const std::string& key : keys) {
     if (key.rfind("crack_", 0) == 0 || key.rfind("spall_", 0) == 0) continue;  // the faults monitored
-    const std::string a = theirs[key] ? YAML::Dump(theirs[key]) : std::string("(absent)");
-    const std::string b = YAML::Dump(kv.second);
+    const auto text = [&](const YAML::Node& side) {
+      return side[key] ? YAML::Dump(side[key]) : std::string("(absent: its default)");
+    };
+    const std::string a = text(theirs), b = text(mine);
     if (a != b)
       throw ReferenceError("reference " + path + " was made for another gear: gear_pair." + key + " = " + a +
                            " there, the monitored gear has " + b + " (make a reference for this gear)");

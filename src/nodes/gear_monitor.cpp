@@ -1,11 +1,17 @@
 // gear_monitor: the condition monitor on a live gear (doc/monitor.md §5). Subscribes to the
 // simulator's state_batch (gear_dynamics/GearStateBatch; or state, gear_dynamics/GearState, with
-// ~input:=state) and run_info, cuts the signal into windows of whole revolutions by the shaft angle
-// phi0 + Omega t, applies the healthy reference (gear_dynamics_monitor) and publishes each window's
-// indicators (gear_dynamics/GearIndicators on `indicators`) and diagnostics (REP 107: OK, WARN,
-// ERROR debounced; STALE when the input stops).
+// ~input:=state) and run_info, and for a bearing-force signal to its bearing's wrench
+// (geometry_msgs/WrenchStamped, paired with the state of the same stamp); cuts the signal into
+// windows of whole revolutions by the state's shaft angle phi0 + Omega t, applies the healthy
+// reference (gear_dynamics_monitor) and publishes each window's indicators
+// (gear_dynamics/GearIndicators on `indicators`) and diagnostics (REP 107: OK, WARN, ERROR
+// debounced; STALE when the input stops).
 #include <diagnostic_msgs/DiagnosticStatus.h>
 #include <diagnostic_updater/diagnostic_updater.h>
+#include <geometry_msgs/WrenchStamped.h>
+#include <message_filters/subscriber.h>
+#include <message_filters/sync_policies/exact_time.h>
+#include <message_filters/synchronizer.h>
 #include <ros/ros.h>
 
 #include <cmath>
@@ -40,6 +46,7 @@ class GearMonitor {
     if (!(stale_timeout_ > 0.0 && stale_timeout_ <= 3600.0))
       throw std::runtime_error("~stale_timeout = " + std::to_string(stale_timeout_) + " is out of range; allowed (0, 3600] s");
     gd::Reference reference = gd::read_reference(reference_path_);
+    spec_ = gd::signal_spec(reference.settings.monitor.signal);
     const gd::ModelConfig config = gd::parse_config(reference.config);
     gear_ = gd::derive(config.gear);
     schedule_ = std::make_unique<gd::MeshSchedule>(gear_, config.run.time_step);
@@ -57,13 +64,21 @@ class GearMonitor {
       state_sub_ = nh_.subscribe("state_batch", 1000, &GearMonitor::batch, this);
     else
       state_sub_ = nh_.subscribe("state", 65536, &GearMonitor::state, this);
+    if (spec_.wrench_topic) {
+      // The wrench and the state of one instant carry the same stamp (the simulator's and the
+      // batch bags'): paired exactly; an instant missing on either side is dropped (a gap).
+      wrench_sub_ = nh_.subscribe(spec_.wrench_topic, 65536, &GearMonitor::wrench, this);
+      pairs_ = std::make_unique<Pairs>(PairPolicy(kPairQueue));
+      pairs_->registerCallback(boost::bind(&GearMonitor::paired, this, boost::placeholders::_1, boost::placeholders::_2));
+    }
     updater_.setHardwareID("gear:" + std::string(gd::to_string(m.signal)));
     updater_.add("condition", this, &GearMonitor::diagnose);
     // Wall time: under /use_sim_time the simulated clock stops with the input, STALE must not.
     timer_ = nh_.createWallTimer(ros::WallDuration(0.5), [this](const ros::WallTimerEvent&) { updater_.force_update(); });
-    ROS_INFO("gear_monitor: reference %s (%s, %d revolution(s) of the %s per window), on %s", reference_path_.c_str(),
-             gd::to_string(m.signal), m.revolutions_per_window, m.gear == gd::FaultyGear::kWheel ? "wheel" : "pinion",
-             state_sub_.getTopic().c_str());
+    ROS_INFO("gear_monitor: reference %s (%s, %d revolution(s) of the %s per window), on %s%s%s",
+             reference_path_.c_str(), gd::to_string(m.signal), m.revolutions_per_window,
+             m.gear == gd::FaultyGear::kWheel ? "wheel" : "pinion", state_sub_.getTopic().c_str(),
+             spec_.wrench_topic ? " and " : "", spec_.wrench_topic ? wrench_sub_.getTopic().c_str() : "");
   }
 
   int exit_code() const { return exit_code_; }
@@ -88,6 +103,23 @@ class GearMonitor {
   }
 
   void state(const gear_dynamics::GearState& s) {
+    if (pairs_) {
+      pairs_->add<0>(boost::make_shared<const gear_dynamics::GearState>(s));
+      return;
+    }
+    const double t = s.t;
+    sample(s, gd::state_signal(gear_, spec_.signal, s.mesh_stiffness, schedule_->transmission_error(t),
+                               schedule_->transmission_error_rate(t), s.delta, s.delta_dot));
+  }
+
+  void wrench(const geometry_msgs::WrenchStamped::ConstPtr& w) { pairs_->add<1>(w); }
+
+  void paired(const gear_dynamics::GearState::ConstPtr& s, const geometry_msgs::WrenchStamped::ConstPtr& w) {
+    sample(*s, gd::wrench_component(spec_, w->wrench.force.x, w->wrench.force.y));
+  }
+
+  // One sample of the signal at the state's time, with its load.
+  void sample(const gear_dynamics::GearState& s, double value) {
     last_input_ = ros::WallTime::now();
     ++states_;
     if (s.t < last_t_) {  // a reset or loop of the simulator: a new run
@@ -95,7 +127,7 @@ class GearMonitor {
       monitor_->reset();
       window_count_ = 0;
       spacing_ = 0.0;
-    } else if (spacing_ > 0.0 && s.t - last_t_ > 2.5 * spacing_) {
+    } else if (spacing_ > 0.0 && s.t - last_t_ > 1.5 * spacing_) {
       // States lost (a full queue): a window must not interpolate across them.
       windows_->restart();
       ++gaps_;
@@ -104,8 +136,6 @@ class GearMonitor {
     }
     last_t_ = s.t;
     if (s.t < warmup_) return;
-    const double value = gd::monitored_signal(gear_, *schedule_, monitor_->settings().signal, s.t, s.mesh_stiffness,
-                                              s.delta, s.delta_dot);
     // The state's t is the grid time rounded to whole nanoseconds; the engine's angle is at n h.
     const double grid_t = std::round(s.t / time_step_) * time_step_;
     const auto window = windows_->add(gd::shaft_angle(gear_, grid_t), value, s.phi);
@@ -193,8 +223,16 @@ class GearMonitor {
     }
   }
 
+  using PairPolicy = message_filters::sync_policies::ExactTime<gear_dynamics::GearState, geometry_msgs::WrenchStamped>;
+  using Pairs = message_filters::Synchronizer<PairPolicy>;
+  // Instants awaiting their other half: many state batches' worth (the simulator's hold up to 64).
+  static constexpr std::uint32_t kPairQueue = 20000;
+
   ros::NodeHandle nh_;
   diagnostic_updater::Updater updater_;
+  gd::MonitoredSignalSpec spec_{};
+  std::unique_ptr<Pairs> pairs_;
+  ros::Subscriber wrench_sub_;
   std::string reference_path_;
   int debounce_ = 2;
   double stale_timeout_ = 2.0, warmup_ = 0.0, last_t_ = -1.0, time_step_ = 0.0;

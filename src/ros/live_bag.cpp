@@ -3,6 +3,7 @@
 #include <gear_dynamics/GearState.h>
 #include <gear_dynamics/GearStateBatch.h>
 #include <gear_dynamics/RunInfo.h>
+#include <geometry_msgs/WrenchStamped.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
 
@@ -33,6 +34,38 @@ std::string choose_topic(const rosbag::Bag& bag) {
   for (const auto& [topic, n] : counts)
     if (single.empty() || n > counts[single]) single = topic;
   return single;
+}
+
+// A bearing's wrenches by their stamp (a later run's, after a ~reset, replaces an earlier one's).
+struct Wrenches {
+  std::string topic;
+  std::map<ros::Time, std::pair<double, double>> force;  // force.x, force.y
+};
+
+Wrenches read_wrenches(const rosbag::Bag& bag, const std::string& suffix) {
+  Wrenches w;
+  rosbag::View all(bag);
+  for (const rosbag::ConnectionInfo* c : all.getConnections())
+    if (c->datatype == "geometry_msgs/WrenchStamped" && ends_with(c->topic, suffix)) w.topic = c->topic;
+  if (w.topic.empty()) return w;
+  for (const rosbag::MessageInstance& m : rosbag::View(bag, rosbag::TopicQuery(w.topic)))
+    if (const auto msg = m.instantiate<geometry_msgs::WrenchStamped>())
+      w.force[msg->header.stamp] = {msg->wrench.force.x, msg->wrench.force.y};
+  return w;
+}
+
+// The wrench of each state's stamp. Throws naming the topic and the time of a state without one.
+void pair_wrenches(const Wrenches& w, const std::string& path, const std::vector<GearState>& states,
+                   std::size_t first, std::vector<double>& x, std::vector<double>& y) {
+  for (std::size_t i = first; i < states.size(); ++i) {
+    const auto it = w.force.find(states[i].header.stamp);
+    if (it == w.force.end())
+      throw std::runtime_error(path + ": " + w.topic + " has no wrench at the state of t = " +
+                               std::to_string(states[i].t) + " s (stamp " + std::to_string(states[i].header.stamp.toSec()) +
+                               "); record it with the states (record:=true, or rosbag record both topics)");
+    x.push_back(it->second.first);
+    y.push_back(it->second.second);
+  }
 }
 
 }  // namespace
@@ -70,6 +103,9 @@ LiveBagRun read_live_bag(const std::string& path) {
   }
   for (const rosbag::MessageInstance& m : rosbag::View(bag))
     if (const auto info = m.instantiate<RunInfo>()) run.parameters_yaml = info->parameters_yaml;
+  std::map<std::string, Wrenches> wrenches;
+  for (const char* ending : kBearingWrenchTopics)
+    if (Wrenches w = read_wrenches(bag, ending); !w.topic.empty()) wrenches[ending] = std::move(w);
   bag.close();
   if (seq_gaps > 0)
     throw std::runtime_error(path + ": " + run.topic + " lost states: " + std::to_string(seq_gaps) +
@@ -95,6 +131,10 @@ LiveBagRun read_live_bag(const std::string& path) {
     run.delta_dot.push_back(s.delta_dot);
     run.phi.push_back(s.phi);
     run.stiffness.push_back(s.mesh_stiffness);
+  }
+  for (const auto& [ending, w] : wrenches) {
+    LiveBagRun::Forces& f = run.wrenches[ending];
+    pair_wrenches(w, path, states, first, f.x, f.y);
   }
   return run;
 }

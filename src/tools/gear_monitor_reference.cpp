@@ -21,7 +21,10 @@ int main(int argc, char** argv) {
   app.add_option("--assess", assess, "apply the reference FILE to runs of this configuration")->type_name("FILE");
   app.add_option("--csv", csv, "with --assess: every window's indicators, T2, score and CUSUM into FILE")
       ->type_name("FILE");
-  app.add_option("--signal", signal, "delta or mesh_force (default delta)");
+  std::string signals;
+  for (const gd::MonitoredSignalSpec& m : gd::monitored_signals()) signals += (signals.empty() ? "" : ", ") + std::string(m.name);
+  app.add_option("--signal", signal, "the monitored signal: " + signals +
+                                         " (a bearing force needs gear_pair.model: bearings; default delta)");
   app.add_option("--gear", gear, "whose revolutions the TSA follows: pinion or wheel (default pinion)");
   app.add_option("--revolutions", s.monitor.revolutions_per_window, "revolutions per window (default 1)");
   app.add_option("--samples", s.monitor.samples_per_revolution, "TSA points per revolution (default 640)");
@@ -40,7 +43,7 @@ int main(int argc, char** argv) {
   gd::tools::parse_or_exit(app, argc, argv);
   try {
     if (output.empty() == assess.empty()) throw std::invalid_argument("give exactly one of --output and --assess");
-    s.monitor.signal = gd::parse_monitored_signal(signal);
+    s.monitor.signal = gd::parse_monitored_signal(signal, "--signal");
     if (gear != "pinion" && gear != "wheel")
       throw std::invalid_argument("--gear = " + gear + " is not allowed; allowed: pinion, wheel");
     s.monitor.gear = gear == "wheel" ? gd::FaultyGear::kWheel : gd::FaultyGear::kPinion;

@@ -31,7 +31,7 @@ gd::StudySettings study_settings(const YAML::Node& node) {
   if (node["test_realizations"]) s.test_realizations = node["test_realizations"].as<int>();
   if (node["first_test"]) s.first_test = node["first_test"].as<std::uint64_t>();
   if (node["windows"]) r.windows = node["windows"].as<int>();
-  if (node["signal"]) r.monitor.signal = gd::parse_monitored_signal(node["signal"].as<std::string>());
+  if (node["signal"]) r.monitor.signal = gd::parse_monitored_signal(node["signal"].as<std::string>(), "monitor_study.signal");
   if (node["revolutions_per_window"]) r.monitor.revolutions_per_window = node["revolutions_per_window"].as<int>();
   if (node["false_alarm"]) r.false_alarm = node["false_alarm"].as<double>();
   if (node["average_run_length"]) r.average_run_length = node["average_run_length"].as<double>();

@@ -4,7 +4,7 @@ full speed, states at 1 kHz), then `gear_analyze spectrum --bag` of that bag aga
 spectrum` of the same run simulated (the live node steps S1 bit for bit as the engine does, so the
 PSDs must agree to rounding); poincare and safety read it too; a bag that lost a state, and one
 still being written, are refused with the reason; the condition monitor of a recorded stochastic
-run against the same stream simulated."""
+run (delta, and a bearing force of the bearings model) against the same stream simulated."""
 import csv
 import glob
 import os
@@ -107,23 +107,24 @@ class AnalyzeBag(unittest.TestCase):
         self.assertEqual(active.returncode, 1)
         self.assertIn('rosbag reindex', active.stderr)
 
-    def test_monitor_of_a_bag(self):
+    def monitor_matches_simulation(self, model_args, launch_args):
         """gear_analyze monitor on a recorded stochastic run gives the windows that
         gear_monitor_reference --assess computes by simulating the same stream (the node's states
-        are the engine's bit for bit; 1e-12 leaves room for the CSVs' 17 digits)."""
+        are the engine's bit for bit; 1e-12 leaves room for the CSVs' 17 digits). Returns the
+        reference, the bag and the output prefix."""
         healthy = os.path.join(PKG, 'test', 'ros', 'monitor_healthy.yaml')  # 0.7 s at 40 kHz, 2000 m/s^2
         reference = os.path.join(self.folder, 'reference.yaml')
         subprocess.run(['rosrun', 'gear_dynamics', 'gear_monitor_reference', '--output', reference, '--config',
-                        healthy, '--realizations', '20', '--windows', '4', '--false-alarm', '0.25'],
+                        healthy, '--realizations', '20', '--windows', '4', '--false-alarm', '0.25'] + model_args,
                        check=True, capture_output=True, timeout=120)
-        bag = self.record(0.7, ('config:=' + healthy, 'realization:=5001'))
+        bag = self.record(0.7, ('config:=' + healthy, 'realization:=5001') + launch_args)
         prefix = os.path.join(self.folder, 'bag')
         got = analyze('monitor', '--reference', reference, '--bag', bag, '--output', prefix)
         self.assertEqual(got.returncode, 0, got.stderr)
         offline = os.path.join(self.folder, 'offline.csv')
         subprocess.run(['rosrun', 'gear_dynamics', 'gear_monitor_reference', '--assess', reference, '--config',
-                        healthy, '--first', '5001', '--realizations', '1', '--windows', '8', '--csv', offline],
-                       check=True, capture_output=True, timeout=120)
+                        healthy, '--first', '5001', '--realizations', '1', '--windows', '8', '--csv', offline]
+                       + model_args[:2], check=True, capture_output=True, timeout=120)
         with open(prefix + '_monitor.csv') as f:
             from_bag = list(csv.DictReader(f))
         with open(offline) as f:
@@ -137,6 +138,24 @@ class AnalyzeBag(unittest.TestCase):
             for name in names:
                 self.assertAlmostEqual(float(b[name]), float(s[name]),
                                        delta=1e-12 * max(abs(float(s[name])), 1e-300), msg=(b['window'], name))
+        return reference, bag, prefix
+
+    def test_monitor_of_a_bearing_force_in_a_bag(self):
+        """The same on the pinion's bearing force along the line of action: the bag's
+        pinion_bearing/wrench paired with its states by stamp. A torsional run's bag is refused
+        by the reference's model."""
+        reference, bag, prefix = self.monitor_matches_simulation(
+            ['--set', 'gear_pair.model=bearings', '--signal', 'pinion_fy'], ('model:=bearings',))
+        os.remove(bag)
+        healthy = os.path.join(PKG, 'test', 'ros', 'monitor_healthy.yaml')
+        torsional = self.record(0.2, ('config:=' + healthy, 't_end:=0.2'))
+        refused = analyze('monitor', '--reference', reference, '--bag', torsional, '--output', prefix)
+        self.assertEqual(refused.returncode, 1)
+        self.assertIn('gear_pair.model', refused.stderr)
+
+    def test_monitor_of_a_bag(self):
+        reference, bag, prefix = self.monitor_matches_simulation([], ())
+        healthy = os.path.join(PKG, 'test', 'ros', 'monitor_healthy.yaml')
         # A bag sampled otherwise than the reference is refused, naming the rate it needs.
         os.remove(bag)
         slow_bag = self.record(0.2, ('config:=' + healthy, 'publish_rate:=1000', 't_end:=0.2'))

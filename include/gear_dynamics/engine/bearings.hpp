@@ -170,6 +170,10 @@ int bearings_step(const BearingsModel& model, const GearPair& gear, const MeshSc
 // The outputs of state y at grid step n (doc/model.md §11).
 BearingsOutputs bearings_outputs(const BearingsModel& model, const GearPair& gear, const MeshSchedule& mesh,
                                  double time_step, std::int64_t n, const BearingsModel::State& y);
+// The same with the mesh at y's time given: K, e and e's rate in `mesh_point` (its other fields
+// unused), looked up once for the lanes of an ensemble.
+BearingsOutputs bearings_outputs(const BearingsModel& model, const GearPair& gear,
+                                 const model_step::MeshPoint& mesh_point, const BearingsModel::State& y);
 // The error a bearings realization's non-finite state throws.
 DivergenceError bearings_divergence(std::uint64_t realization, int lane, double delta_m, double time);
 // The same for lane i of an ensemble of the bearings model (Ensemble::model_state()).

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "gear_dynamics/config/config.hpp"
+#include "gear_dynamics/engine/bearings.hpp"
 #include "gear_dynamics/model/mesh_schedule.hpp"
 #include "gear_dynamics/monitor/indicators.hpp"
 
@@ -29,9 +30,34 @@ class ReferenceError : public std::runtime_error {
   explicit ReferenceError(const std::string& what) : std::runtime_error(what) {}
 };
 
-enum class MonitoredSignal { kDelta, kMeshForce };
+// The signals the monitor takes, one row each of monitored_signals() in this order.
+enum class MonitoredSignal { kDelta, kMeshForce, kPinionFx, kPinionFy, kWheelFx, kWheelFy };
+
+// One monitored signal (doc/architecture.md, "A monitored signal"). delta and the mesh force come
+// from a state, in every model; a bearing force is the bearings model's output of the same name
+// (kBearingsOutputs), and on ROS the force.x (across the line of action) or force.y (along it) of
+// its body's bearing wrench, `wrench_topic` (geometry_msgs/WrenchStamped, the batch bags' message).
+struct MonitoredSignalSpec {
+  MonitoredSignal signal;
+  const char* name;  // the value of --signal, monitor_study.signal and the reference file
+  const char* unit;  // SI
+  const char* description;
+  double BearingsOutputs::*bearing_force;  // the bearings model's output; null: from the state
+  const char* wrench_topic;                // relative to the simulator's namespace; null: from the state
+  bool across;                             // the wrench's force.x; else force.y
+};
+const std::vector<MonitoredSignalSpec>& monitored_signals();
+const MonitoredSignalSpec& signal_spec(MonitoredSignal signal);
 const char* to_string(MonitoredSignal signal);
-MonitoredSignal parse_monitored_signal(const std::string& text);  // delta | mesh_force
+// Throws std::invalid_argument naming the key, the value and the allowed names.
+MonitoredSignal parse_monitored_signal(const std::string& text, const std::string& key = "monitor.signal");
+// Throws std::invalid_argument naming the signal and the model when `model` does not produce it
+// (a bearing force of the torsional model).
+void require_signal(MonitoredSignal signal, GearModel model);
+// A bearing force's component of its wrench's force (x, y) [N].
+inline double wrench_component(const MonitoredSignalSpec& spec, double force_x, double force_y) {
+  return spec.across ? force_x : force_y;
+}
 
 // What is monitored and how it is cut into windows.
 struct MonitorSettings {
@@ -63,10 +89,12 @@ double revolution_angle(const GearPair& gear, FaultyGear which);  // [rad] of th
 int monitored_teeth(const GearPair& gear, FaultyGear which);
 double shaft_angle(const GearPair& gear, double t);  // theta1 = phi0 + Omega t [rad]
 IndicatorSettings indicator_settings(const GearPair& gear, const MonitorSettings& settings);
-// The monitored signal of a state at time t: delta [m], or the mesh force the kernel integrates
-// (gear_pair.hpp's mesh_force with the schedule's e and its rate) [N].
-double monitored_signal(const GearPair& gear, const MeshSchedule& mesh, MonitoredSignal signal, double t,
-                        double stiffness, double delta, double delta_dot);
+// A signal taken from a state: delta [m], or the mesh force the kernel integrates
+// (gear_pair.hpp's mesh_force) [N] from the state's K, delta and delta_dot and the schedule's e and
+// its rate at the state's time. Throws std::invalid_argument for a bearing force (its model's
+// outputs or its wrench hold it).
+double state_signal(const GearPair& gear, MonitoredSignal signal, double stiffness, double error, double error_rate,
+                    double delta, double delta_dot);
 
 // Runs stochastic realizations first .. first + count - 1 of `config` and returns each one's first
 // `windows` windows that start after `warmup`.

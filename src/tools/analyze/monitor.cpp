@@ -41,12 +41,21 @@ class Monitor : public Subcommand {
                     b.period, sampling, 1.0 / sampling);
       throw std::runtime_error(text);
     }
+    const MonitoredSignalSpec& spec = signal_spec(m.signal);
+    const auto wrench = spec.wrench_topic ? b.run.wrenches.find(spec.wrench_topic) : b.run.wrenches.end();
+    if (spec.wrench_topic && wrench == b.run.wrenches.end())
+      throw std::runtime_error("--bag: the reference monitors " + std::string(spec.name) + ", and " + bag_ +
+                               " has no geometry_msgs/WrenchStamped on " + spec.wrench_topic +
+                               " (the bearings model's simulator records it with record:=true)");
     std::vector<double> angle, value, load;
     for (std::size_t i = first_after(b, ref.settings.warmup); i < b.run.t.size(); ++i) {
       const double t = b.run.t[i];
       // The state's t is the grid time rounded to whole nanoseconds; the engine's angle is at n h.
       angle.push_back(shaft_angle(gear, std::round(t / h) * h));
-      value.push_back(monitored_signal(gear, mesh, m.signal, t, b.run.stiffness[i], b.run.delta[i], b.run.delta_dot[i]));
+      value.push_back(spec.wrench_topic ? wrench_component(spec, wrench->second.x[i], wrench->second.y[i])
+                                         : state_signal(gear, m.signal, b.run.stiffness[i], mesh.transmission_error(t),
+                                                        mesh.transmission_error_rate(t), b.run.delta[i],
+                                                        b.run.delta_dot[i]));
       load.push_back(b.run.phi[i]);
     }
     const std::vector<MonitoredWindow> windows = monitor_series(ref, angle, value, load);

@@ -9,8 +9,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <random>
 
+#include "gear_dynamics/engine/ensemble.hpp"
 #include "gear_dynamics/monitor/reference.hpp"
 
 namespace gd = gear_dynamics;
@@ -254,4 +256,161 @@ TEST(MonitorReference, BadSettingsNameTheKey) {
   s.monitor.gear = gd::FaultyGear::kNone;
   EXPECT_THROW(gd::validate(s), std::invalid_argument);
   EXPECT_THROW(gd::parse_monitored_signal("force"), std::invalid_argument);
+}
+
+namespace {
+
+// The paper's gear on its bearings at a mean load where the teeth stay in contact.
+gd::ModelConfig bearings_config(double mu) {
+  gd::ModelConfig c = paper_config();
+  c.gear.model = gd::GearModel::kBearings;
+  c.load.initial_mean = 2000.0;
+  c.friction_coefficient = mu;
+  return c;
+}
+
+// The first window of one realization cut the way simulate_windows documents it, from a lane
+// stepped here and each sample's outputs from the schedule at grid step n (the other overload of
+// bearings_outputs: no mesh point shared between lanes).
+gd::RevolutionWindow first_window_by_hand(const gd::ModelConfig& config, const gd::MonitorSettings& m,
+                                          std::uint64_t realization, double warmup, double gd::BearingsOutputs::*force) {
+  const gd::GearPair gear = gd::derive(config.gear);
+  const double h = config.run.time_step;
+  gd::Ensemble lane(gear, h, config.initial, {gd::stochastic_lane(config, config.friction_coefficient, realization)},
+                    config.seed);
+  gd::RevolutionWindows cut(gd::revolution_angle(gear, m.gear), m.revolutions_per_window, m.samples_per_revolution);
+  const auto first = static_cast<std::int64_t>(std::floor(warmup / h));
+  for (;;) {
+    lane.step();
+    const std::int64_t n = lane.step_index();
+    if (n < first || n % m.decimation != 0) continue;
+    const gd::BearingsModel::State y = lane.model_state().col(0);
+    const double value = gd::bearings_outputs(*lane.bearings_model(), gear, lane.mesh(), h, n, y).*force;
+    if (auto w = cut.add(gd::shaft_angle(gear, lane.time()), value, lane.load()(0))) return *w;
+  }
+}
+
+double mean(const Eigen::VectorXd& v) { return v.mean(); }
+
+}  // namespace
+
+// Every name parses back to its signal; an unknown name, a bearing force of the torsional model,
+// or a bearing force asked of a state are refused naming the key, the value and what is allowed.
+TEST(MonitorSignals, TableAndRefusals) {
+  for (const gd::MonitoredSignalSpec& s : gd::monitored_signals()) {
+    EXPECT_EQ(gd::parse_monitored_signal(s.name), s.signal);
+    EXPECT_EQ(&gd::signal_spec(s.signal), &s);
+    EXPECT_EQ(s.bearing_force == nullptr, s.wrench_topic == nullptr) << s.name;
+  }
+  try {
+    gd::parse_monitored_signal("force", "--signal");
+    FAIL() << "force was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("--signal = force"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("pinion_fy"), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW(gd::require_signal(gd::MonitoredSignal::kWheelFx, gd::GearModel::kBearings));
+  EXPECT_NO_THROW(gd::require_signal(gd::MonitoredSignal::kMeshForce, gd::GearModel::kTorsional));
+  gd::MonitorSettings m;
+  m.signal = gd::MonitoredSignal::kPinionFy;
+  try {
+    gd::simulate_windows(paper_config(), m, 0, 1, 0.1, 1);
+    FAIL() << "a bearing force of the torsional model was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("monitor.signal = pinion_fy"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("gear_pair.model = bearings"), std::string::npos) << e.what();
+  }
+  // At mu = 0 nothing acts across the line of action: a reference on that constant is refused.
+  auto s = settings(20);
+  s.false_alarm = 0.25;
+  s.warmup = 0.02;
+  s.monitor.signal = gd::MonitoredSignal::kPinionFx;
+  try {
+    gd::build_reference(bearings_config(0.0), s);
+    FAIL() << "a reference on pinion_fx at mu = 0 was made";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("monitor.signal = pinion_fx"), std::string::npos) << e.what();
+  }
+  // A reference on the bearings model does not fit a torsional gear, whose configuration leaves
+  // the model's key out (its default), nor the reverse.
+  s.monitor.signal = gd::MonitoredSignal::kPinionFy;
+  const gd::Reference on_bearings = gd::build_reference(bearings_config(0.04), s);
+  gd::ModelConfig torsional = bearings_config(0.04);
+  torsional.gear.model = gd::GearModel::kTorsional;
+  try {
+    gd::check_reference(on_bearings, torsional, "ref.yaml");
+    FAIL() << "a bearings reference was accepted for the torsional model";
+  } catch (const gd::ReferenceError& e) {
+    EXPECT_NE(std::string(e.what()).find("gear_pair.model = bearings"), std::string::npos) << e.what();
+  }
+  s.monitor.signal = gd::MonitoredSignal::kDelta;
+  const gd::Reference on_torsional = gd::build_reference(torsional, s);
+  EXPECT_THROW(gd::check_reference(on_torsional, bearings_config(0.04), "ref.yaml"), gd::ReferenceError);
+  EXPECT_NO_THROW(gd::check_reference(on_bearings, bearings_config(0.04), "ref.yaml"));
+  const gd::GearPair gear = gd::derive(paper_config().gear);
+  EXPECT_THROW(gd::state_signal(gear, gd::MonitoredSignal::kWheelFy, 1e8, 0, 0, 1e-5, 0), std::invalid_argument);
+}
+
+// A bearing force's windows are the bearings model's outputs on the reference's grid: equal bit for
+// bit to a lane stepped and cut by hand, and the mesh force's to the model's F_m to rounding (the
+// state's formula with delta_m). The physics of the outputs: at mu = 0 nothing acts across the line
+// of action (x identically 0), at 0.04 friction does; along it the bearings push the pinion
+// against the mesh force and the wheel with it. (A TSA holds point values interpolated at 640
+// angles per revolution, not time averages, so the force balance of the means is not checked on it.)
+TEST(MonitorSignals, BearingForceWindowsAreTheModelsOutputs) {
+  gd::MonitorSettings m;
+  const double warmup = 0.1;
+  std::map<gd::MonitoredSignal, Eigen::VectorXd> tsa;
+  for (double mu : {0.0, 0.04}) {
+    const gd::ModelConfig config = bearings_config(mu);
+    for (const gd::MonitoredSignalSpec& s : gd::monitored_signals()) {
+      m.signal = s.signal;
+      const auto runs = gd::simulate_windows(config, m, 3, 1, warmup, 1);
+      ASSERT_EQ(runs.size(), 1u);
+      ASSERT_EQ(runs[0].size(), 1u);
+      tsa[s.signal] = runs[0][0].tsa;
+      if (!s.bearing_force) continue;
+      const gd::RevolutionWindow by_hand = first_window_by_hand(config, m, 3, warmup, s.bearing_force);
+      EXPECT_EQ(runs[0][0].tsa, by_hand.tsa) << s.name << " at mu " << mu;
+      EXPECT_EQ(runs[0][0].mean_load, by_hand.mean_load) << s.name;
+    }
+    using S = gd::MonitoredSignal;
+    // The mesh force signal of the bearings model is its output F_m (from delta_m and its rate).
+    m.signal = S::kMeshForce;
+    const Eigen::VectorXd model_force = first_window_by_hand(config, m, 3, warmup, &gd::BearingsOutputs::mesh_force).tsa;
+    const double force = mean(tsa[S::kMeshForce]);
+    EXPECT_LE((model_force - tsa[S::kMeshForce]).cwiseAbs().maxCoeff(), 1e-12 * force) << "mu " << mu;
+    EXPECT_GT(force, 50.0);
+    // The bearings hold the bodies against the mesh force: the pinion pushed along -y, the wheel +y.
+    EXPECT_LT(tsa[S::kPinionFy].maxCoeff(), 0.0) << "mu " << mu;
+    EXPECT_GT(tsa[S::kWheelFy].minCoeff(), 0.0) << "mu " << mu;
+    if (mu == 0.0) {
+      EXPECT_EQ(tsa[S::kPinionFx].cwiseAbs().maxCoeff(), 0.0);
+      EXPECT_EQ(tsa[S::kWheelFx].cwiseAbs().maxCoeff(), 0.0);
+    } else {
+      EXPECT_GT(tsa[S::kPinionFx].cwiseAbs().maxCoeff(), 0.01 * force);
+    }
+  }
+}
+
+// A reference on the pinion's bearing force along the line of action (the bearings model at
+// 2000 m/s^2) holds its false-alarm rate on held-out streams: T^2 above its 5 % threshold in a
+// fraction within 3 standard deviations of binomial sampling, inflated for the reference's own
+// quantile, sqrt(a (1 - a) (1 / n_test + 1 / n_ref)) = 0.0136 at n = 512.
+TEST(MonitorSignals, BearingForceReferenceHoldsItsFalseAlarmRate) {
+  const gd::ModelConfig config = bearings_config(0.04);
+  const int n = 512;
+  auto s = settings(n);
+  s.monitor.signal = gd::MonitoredSignal::kPinionFy;
+  const gd::Reference ref = gd::build_reference(config, s);
+  const auto runs = gd::simulate_windows(config, ref.settings.monitor, n, n, s.warmup, 1);
+  gd::ConditionMonitor monitor(ref);
+  int t2 = 0;
+  for (const auto& run : runs) {
+    monitor.reset();
+    t2 += monitor.assess(run.at(0)).t2_alarm;
+  }
+  const double alpha = s.false_alarm, sd = std::sqrt(alpha * (1 - alpha) * (2.0 / n));
+  std::printf("pinion_fy reference: T2 above its threshold in %d of %d held-out windows (nominal %.2f)\n", t2, n, alpha);
+  EXPECT_NEAR(static_cast<double>(t2) / n, alpha, 3 * sd);
 }
