@@ -4,7 +4,8 @@
 layers it depends on, directly or through others, and no ROS header (roscpp, rosbag, messages,
 dynamic_reconfigure, the package's generated message headers). Each core library's CMake links
 must be edges of the same graph, and every folder under include/gear_dynamics/ and src/ must be a
-declared layer or one of the ROS-side folders.
+declared layer or one of the ROS-side folders. The core's tests follow their layer's rule (TEST_EXTRA,
+TEST_ANY).
 
 usage: check_layers.py JUNIT_XML"""
 import os
@@ -84,6 +85,62 @@ def violations(layer, text, graph=None):
     return out
 
 
+# The core's tests (test/core/<layer>/test_<unit>.cpp) follow their layer's rule, plus the one
+# header that reads the shipped configuration files the cases are pinned on (the paper's gear is a
+# configuration). Tests of layers that must agree with each other are in test/core/integration/,
+# which may include any core layer; test/core/support/ holds the tests' helpers.
+TEST_EXTRA = {"gear_dynamics/config/config.hpp"}
+TEST_ANY = "integration"
+TEST_HELPERS = "support"
+
+
+def test_violations(layer, text, graph=None):
+    """The offending includes of one core test file of `layer`."""
+    if layer == TEST_ANY:
+        return violations_any(text, graph)
+    stripped = "\n".join(line for line in text.splitlines()
+                          if not any(line.strip().endswith(f'"{h}"') for h in TEST_EXTRA))
+    return violations(layer, stripped, graph)
+
+
+def violations_any(text, graph=None):
+    """Includes of a core test that may include any layer: ROS headers and undeclared layers only."""
+    graph = LAYERS if graph is None else graph
+    out = []
+    for header in INCLUDE.findall(text):
+        if ROS_HEADER.search(header):
+            out.append(f"{header}: a ROS header in the ROS-free core")
+        elif header.startswith("gear_dynamics/"):
+            parts = header.split("/")
+            other = parts[1] if len(parts) > 2 else "(top level)"
+            if other not in graph:
+                out.append(f"{header}: '{other}' is not a declared core layer")
+    return out
+
+
+def test_files():
+    """(layer folder, path) of every core test source."""
+    base = os.path.join(ROOT, "test", "core")
+    for folder in sorted(os.listdir(base)):
+        for dirpath, _, names in os.walk(os.path.join(base, folder)):
+            for n in sorted(names):
+                if n.endswith((".hpp", ".cpp", ".h")):
+                    yield folder, os.path.join(dirpath, n)
+
+
+def check_tests():
+    problems = []
+    for folder, path in test_files():
+        if folder == TEST_HELPERS:
+            continue
+        if folder not in LAYERS and folder != TEST_ANY:
+            problems.append(f"{os.path.relpath(path, ROOT)}: test/core/{folder} is not a layer (nor {TEST_ANY})")
+            continue
+        with open(path, encoding="utf-8") as f:
+            problems += [f"{os.path.relpath(path, ROOT)}: {v}" for v in test_violations(folder, f.read())]
+    return problems
+
+
 def link_violations(cmake_text, graph=None):
     """Links of a core library (target_link_libraries(${PROJECT_NAME}_<layer> ...)) to another
     layer's library that the graph does not declare as a direct dependency."""
@@ -137,6 +194,14 @@ def self_check():
     assert link_violations("target_link_libraries(${PROJECT_NAME}_config PUBLIC ${PROJECT_NAME}_ros)"), \
         "link to the ROS layer not caught"
     assert not link_violations("target_link_libraries(${PROJECT_NAME}_live PUBLIC ${PROJECT_NAME}_config)")
+    assert test_violations("maths", '#include "gear_dynamics/engine/ensemble.hpp"\n'), "upward test include not caught"
+    assert test_violations("dynamics", '#include "gear_dynamics/montecarlo/batch.hpp"\n'), \
+        "sibling test include not caught"
+    assert not test_violations("engine", '#include "gear_dynamics/config/config.hpp"\n')
+    assert test_violations("engine", '#include "gear_dynamics/config/batch_settings.hpp"\n'), \
+        "a test's upward include beyond config.hpp not caught"
+    assert not test_violations(TEST_ANY, '#include "gear_dynamics/montecarlo/batch.hpp"\n')
+    assert test_violations(TEST_ANY, "#include <ros/ros.h>\n"), "ROS header in a test not caught"
     try:
         reachable("a", {"a": ["b"], "b": ["a"]})
         raise AssertionError("cycle not caught")
@@ -172,6 +237,7 @@ def main():
                 problems.append(f"layer '{layer}' has no files")
             return problems
         cases.append((f"layer_{layer}", check))
+    cases.append(("core_tests", check_tests))
     return 1 if run_cases("layers", cases, sys.argv[1] if len(sys.argv) > 1 else None) else 0
 
 

@@ -8,8 +8,8 @@
 #include <algorithm>
 
 #include "support/bad_input.hpp"
-#include "gear_dynamics/analysis/batch_analysis.hpp"
 #include "gear_dynamics/config/aggregator_settings.hpp"
+#include "gear_dynamics/config/analysis_settings.hpp"
 #include "gear_dynamics/config/batch_settings.hpp"
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/config/parameters.hpp"

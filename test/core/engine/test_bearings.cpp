@@ -16,6 +16,8 @@
 #include "gear_dynamics/engine/bearings.hpp"
 #include "gear_dynamics/engine/realization.hpp"
 #include "gear_dynamics/engine/simulation.hpp"
+#include "gear_dynamics/model/friction_law.hpp"
+#include "gear_dynamics/model/mesh_table.hpp"
 
 namespace gd = gear_dynamics;
 using M = gd::BearingsModel;
@@ -584,4 +586,23 @@ TEST(Bearings, ReportedMeshForceIsTheDerivativesForce) {
   // The slopes agree to rounding (table slope times speed against a difference over H).
   EXPECT_LT(worst, 1e-9);
   EXPECT_GT(forward_worst, 1e-6) << "the check must tell a forward difference from the rate";
+}
+
+// Both models take the same mu_j: in single contact the torsional f(theta) of the table is the
+// bearings model's sigma(theta) times the pair's arm c0 + c1 x (doc/model.md §2 and §11).
+TEST(Bearings, SharesEachPairsMuWithTheTorsionalModel) {
+  for (gd::FrictionModel m : {gd::FrictionModel::kBenedictKelley, gd::FrictionModel::kXu}) {
+    gd::GearInputs in;
+    in.friction_model = m;
+    in.friction_load = 1000.0;
+    const gd::GearPair g = gd::derive(in);
+    const auto table = gd::shared_mesh_table(g);
+    for (double u : {0.1, 0.3, 0.5}) {  // single contact: phi below phi_m
+      const double phi = u * g.single_pair_angle, x = g.x_b + g.base_radius1 * phi;
+      const double sigma = gd::friction_share(g, table.get(), phi);
+      const double f = table->exact(table->piece_of(phi), phi).friction;
+      EXPECT_NEAR(f, sigma * (g.c0 + g.c1 * x), 1e-6 * std::fabs(f));
+      EXPECT_NEAR(sigma, gd::law_friction_coefficient(g, x, 1000.0) / gd::kLawReferenceMu, 1e-9 * sigma);
+    }
+  }
 }

@@ -8,7 +8,6 @@
 #include <string>
 
 #include "gear_dynamics/config/config.hpp"
-#include "gear_dynamics/engine/bearings.hpp"
 #include "gear_dynamics/model/friction_law.hpp"
 #include "gear_dynamics/model/mesh_table.hpp"
 
@@ -159,18 +158,3 @@ TEST(FrictionLaw, BadValuesAreRefusedNamingKeyValueAndRange) {
   EXPECT_NE(error_of("friction_load", "-5").find("gear_pair.friction_load"), std::string::npos);
 }
 
-// Both models take the same mu_j: in single contact the torsional f(theta) of the table is the
-// bearings model's sigma(theta) times the pair's arm c0 + c1 x (doc/model.md §2 and §11).
-TEST(FrictionLaw, TorsionalAndBearingsModelsShareEachPairsMu) {
-  for (gd::FrictionModel m : {gd::FrictionModel::kBenedictKelley, gd::FrictionModel::kXu}) {
-    const gd::GearPair g = pair_with(m, 1000.0);
-    const auto table = gd::shared_mesh_table(g);
-    for (double u : {0.1, 0.3, 0.5}) {  // single contact: phi below phi_m
-      const double phi = u * g.single_pair_angle, x = g.x_b + g.base_radius1 * phi;
-      const double sigma = gd::friction_share(g, table.get(), phi);
-      const double f = table->exact(table->piece_of(phi), phi).friction;
-      EXPECT_NEAR(f, sigma * (g.c0 + g.c1 * x), 1e-6 * std::fabs(f));
-      EXPECT_NEAR(sigma, gd::law_friction_coefficient(g, x, 1000.0) / gd::kLawReferenceMu, 1e-9 * sigma);
-    }
-  }
-}

@@ -1,6 +1,6 @@
 // The tabulated mesh (doc/model.md §3, §5): friction that reverses at the pitch point, profile
-// errors, the schedule period, the step plans at the jumps, and the kernel with a transmission
-// error against closed forms.
+// errors, the schedule period and the step plans at the jumps (the kernel with a transmission
+// error: engine/test_rk4_kernel.cpp).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -10,8 +10,6 @@
 #include <vector>
 
 #include "gear_dynamics/config/config.hpp"
-#include "gear_dynamics/engine/ensemble.hpp"
-#include "gear_dynamics/engine/rk4_kernel.hpp"
 #include "gear_dynamics/model/mesh_schedule.hpp"
 #include "gear_dynamics/model/mesh_table.hpp"
 
@@ -22,16 +20,6 @@ namespace {
 gd::ModelConfig paper_config() {
   const std::string dir = GEAR_DYNAMICS_CONFIG_DIR;
   return gd::parse_config(gd::read_yaml_files({dir + "/gear_pair.yaml", dir + "/load.yaml", dir + "/run.yaml"}));
-}
-
-// Step n of a frozen mesh K with the transmission error e(t) = c t.
-gd::StepPlan ramp(double K, double c, int n, double h) {
-  gd::StepPlan p;
-  p.excited = true;
-  gd::StepSegment& s = p.segment[0];
-  s.stiffness_start = s.stiffness_mid = s.stiffness_end = K;
-  s.error_start = c * n * h, s.error_end = c * (n + 1) * h;
-  return p;
 }
 
 gd::GearPair reversing_square_wave() {
@@ -124,63 +112,6 @@ TEST(MeshTable, PlansSplitAtTheJumps) {
   // Each side is taken a billionth of its piece inside it: x moves by at most Rb1 1e-9 phi_n.
   EXPECT_NEAR(-p.segment[0].friction_end, p.segment[1].friction_start, 2.0 * g.c1 * g.base_radius1 * 1e-9 * g.mesh_period_angle);
   EXPECT_EQ(p.segment[0].stiffness_end, g.k1);
-}
-
-// Every profile error the same: e is that constant, and the motion is the paper's shifted by it
-// (the boundaries and the spring move together), to rounding over the first 20 ms.
-TEST(MeshTable, EqualProfileErrorsShiftTheMotion) {
-  gd::GearInputs in;
-  const double c = 3e-6;
-  in.profile_errors.pinion.assign(in.pinion_teeth, c);
-  const gd::GearPair g0 = gd::derive(gd::GearInputs{}), g1 = gd::derive(in);
-  const double h = 2.5e-6;
-  gd::Ensemble a(g0, h, {0.0, 0.0}, {gd::LaneSpec{0.04, 0.0, 0.0, 20.0, 0.0, 0, false}}, 1);
-  gd::Ensemble b(g1, h, {c, 0.0}, {gd::LaneSpec{0.04, 0.0, 0.0, 20.0, 0.0, 0, false}}, 1);
-  EXPECT_NE(b.mesh().table(), nullptr);
-  double worst = 0.0;
-  for (int n = 0; n < 8000; ++n) {
-    a.step(), b.step();
-    worst = std::max(worst, std::abs(b.delta()[0] - c - a.delta()[0]));
-  }
-  EXPECT_LT(worst, 1e-12) << "largest |delta_e - e - delta_0| [m]";
-}
-
-// The kernel with e(t) = c t in permanent contact without backlash or damping (b = 0, alpha = 0,
-// frozen K): delta = F/(qK) (1 - cos wt) + c (t - sin(wt)/w) from rest. RK4's error shrinks as h^4.
-TEST(MeshTable, KernelFollowsALinearTransmissionError) {
-  const double K = 1.3447321e8, q = 19.143710, F = 20.0, c = 1e-3, w = std::sqrt(q * K);
-  const auto run = [&](double h) {
-    double d = 0.0, v = 0.0, worst = 0.0;
-    const int N = static_cast<int>(std::round(1e-3 / h));
-    for (int n = 0; n < N; ++n) {
-      gd::kernel::rk4_step<double>(ramp(K, c, n, h), h, 0.0, 0.0, q, 0.0, F, F, d, v);
-      const double t = (n + 1) * h;
-      worst = std::max(worst, std::abs(d - (F / (q * K) * (1 - std::cos(w * t)) + c * (t - std::sin(w * t) / w))));
-    }
-    return worst;
-  };
-  const double scale = F / (q * K) + c / w, e1 = run(1e-6), e2 = run(0.5e-6);
-  EXPECT_LT(e1, 1e-3 * scale);
-  EXPECT_GT(e1 / e2, 12.0) << e1 << " " << e2;
-}
-
-// A boundary that moves (b + c t) is located: free flight, impact, rebound; the state at 3.2 ms,
-// after them, converges at fourth order (its error against h/16 shrinks >= 10x per halving).
-TEST(MeshTable, MovingBoundaryIsLocated) {
-  const gd::GearPair g = gd::derive(gd::GearInputs{});
-  const double K = g.k1, q = g.q3, b = g.in.backlash, alpha = g.damping_coefficient, F = 20.0, c = -4e-3;
-  const auto run = [&](double h) {
-    double d = 0.0, v = 0.0;
-    const int N = static_cast<int>(std::round(3.2e-3 / h));
-    for (int n = 0; n < N; ++n) {
-      gd::kernel::rk4_step<double>(ramp(K, c, n, h), h, b, alpha, q, 0.0, F, F, d, v);
-    }
-    return d;
-  };
-  const double ref = run(0.125e-6), e1 = std::abs(run(2e-6) - ref), e2 = std::abs(run(1e-6) - ref),
-               e3 = std::abs(run(0.5e-6) - ref);
-  EXPECT_GT(e1 / e2, 10.0) << e1 << " " << e2;
-  EXPECT_GT(e2 / e3, 10.0) << e2 << " " << e3;
 }
 
 // The configuration refuses what the model cannot take, naming the key.
@@ -282,46 +213,3 @@ TEST(MeshTable, InterpolationWithinATenthOfAPercent) {
               t.pieces(), t.nodes(), t.mesh_periods(), worst);
 }
 
-// The reported mesh force of a gear with profile errors is the force the kernel damps with:
-// K g(delta - e) + alpha |g| (delta_dot - e_dot). Independently: e_dot as a forward difference of
-// e(t) over 1 ns (inside one node of the table, where e is a straight line, so only rounding
-// differs), and the force as -acceleration of the kernel at the state with load 0 and Q = 1.
-TEST(MeshTable, MeshForceDampsTheRelativeVelocity) {
-  gd::GearInputs in;
-  in.mesh_stiffness = gd::MeshStiffnessModel::kPotentialEnergy;  // shares vary: e varies within a piece
-  in.profile_errors.pinion = {4e-6, -3e-6, 0.0, 5e-6, -2e-6};
-  in.profile_errors.wheel = {1e-6, 0.0, -4e-6};
-  const gd::GearPair g = gd::derive(in);
-  const double h = 2.5e-6, dt = 1e-9;
-  gd::Ensemble e(g, h, {g.in.backlash + 2e-6, 0.0}, {gd::LaneSpec{0.04, 0.0, 0.0, 2000.0, 0.0, 0, false}}, 1);
-  int compared = 0, moving = 0;
-  double worst_rate = 0.0, worst_force = 0.0, largest_change = 0.0;
-  for (int n = 0; n < 40000; ++n) {
-    e.step();
-    if (n % 7 != 0) continue;
-    const double t = e.time(), K = e.mesh().stiffness(t), err = e.mesh().transmission_error(t);
-    const double rate = e.mesh().transmission_error_rate(t);
-    const double fd = (e.mesh().transmission_error(t + dt) - err) / dt;
-    const double d = e.delta()[0], v = e.velocity()[0];
-    const double force = gd::mesh_force(g, K, d, v, err, rate);
-    const double kernel = -gd::kernel::acceleration<double, double, true>(d, v, 0.0, K, 1.0, g.in.backlash,
-                                                                       g.damping_coefficient, err, fd);
-    // e ~ 1e-5 m over 1 ns: rounding of the difference ~ 1e-21 / 1e-9 = 1e-12 m/s; 1e-9 m/s allows
-    // a node boundary inside the nanosecond on a few samples, which the count below would show.
-    if (std::abs(rate - fd) > 1e-9) continue;
-    ++compared;
-    worst_rate = std::max(worst_rate, std::abs(rate - fd));
-    // Relative to the force scale K b: the two differ only by the fused roundings of the kernel.
-    worst_force = std::max(worst_force, std::abs(force - kernel) / (K * g.in.backlash));
-    if (rate != 0.0) ++moving;
-    largest_change = std::max(largest_change, std::abs(force - gd::mesh_force(g, K, d, v, err, 0.0)));
-  }
-  EXPECT_GT(compared, 5000) << "samples with the same slope on both sides of 1 ns";
-  // e moves only where two pairs share the load with changing shares (a quarter of the samples here).
-  EXPECT_GT(moving, compared / 10) << "samples where e moves";
-  EXPECT_LT(worst_force, 1e-12);
-  // The damper's e_dot term matters: without it the force differs by more than 1 mN somewhere.
-  EXPECT_GT(largest_change, 1e-3) << "largest |F(e_dot) - F(0)| [N]";
-  std::printf("%d samples, %d with e moving; largest |e_dot - fd| %.1e m/s, |F(e_dot) - F(0)| %.3e N\n",
-              compared, moving, worst_rate, largest_change);
-}
