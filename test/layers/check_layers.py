@@ -67,10 +67,11 @@ def reachable(layer, graph=None):
     return seen
 
 
-def violations(layer, text, graph=None):
-    """The offending includes of one file of `layer`, each with the reason."""
+def violations(layer, text, graph=None, any_layer=False):
+    """The offending includes of one file of `layer`, each with the reason (with any_layer, only
+    ROS headers and undeclared layers)."""
     graph = LAYERS if graph is None else graph
-    allowed = reachable(layer, graph)
+    allowed = list(graph) if any_layer else reachable(layer, graph)
     out = []
     for header in INCLUDE.findall(text):
         if ROS_HEADER.search(header):
@@ -97,25 +98,10 @@ TEST_HELPERS = "support"
 def test_violations(layer, text, graph=None):
     """The offending includes of one core test file of `layer`."""
     if layer == TEST_ANY:
-        return violations_any(text, graph)
+        return violations(layer, text, graph, any_layer=True)
     stripped = "\n".join(line for line in text.splitlines()
                           if not any(line.strip().endswith(f'"{h}"') for h in TEST_EXTRA))
     return violations(layer, stripped, graph)
-
-
-def violations_any(text, graph=None):
-    """Includes of a core test that may include any layer: ROS headers and undeclared layers only."""
-    graph = LAYERS if graph is None else graph
-    out = []
-    for header in INCLUDE.findall(text):
-        if ROS_HEADER.search(header):
-            out.append(f"{header}: a ROS header in the ROS-free core")
-        elif header.startswith("gear_dynamics/"):
-            parts = header.split("/")
-            other = parts[1] if len(parts) > 2 else "(top level)"
-            if other not in graph:
-                out.append(f"{header}: '{other}' is not a declared core layer")
-    return out
 
 
 def test_files():

@@ -7,16 +7,9 @@
 #include "gear_dynamics/dynamics/bifurcation.hpp"
 #include "gear_dynamics/model/mesh_table.hpp"
 
+#include "paper_config.hpp"
+
 namespace gd = gear_dynamics;
-
-namespace {
-
-gd::ModelConfig paper_config() {
-  const std::string dir = GEAR_DYNAMICS_CONFIG_DIR;
-  return gd::parse_config(gd::read_yaml_files({dir + "/gear_pair.yaml", dir + "/load.yaml", dir + "/run.yaml"}));
-}
-
-}  // namespace
 
 // A scan of a forced linear oscillator over its damping ratio (lanes = parameter values): each
 // value's Poincare points are the single analytic steady-state point.

@@ -13,6 +13,8 @@
 #include "gear_dynamics/engine/rk4_kernel.hpp"
 #include "gear_dynamics/model/mesh_schedule.hpp"
 
+#include "paper_config.hpp"
+
 namespace gd = gear_dynamics;
 
 // Free damped oscillator: every separation decays like e^(-zeta omega t), so lambda_1 = -zeta omega.
@@ -52,11 +54,6 @@ TEST(Lyapunov, LorenzClassic) {
 }
 
 namespace {
-
-gd::ModelConfig paper_config() {
-  const std::string dir = GEAR_DYNAMICS_CONFIG_DIR;
-  return gd::parse_config(gd::read_yaml_files({dir + "/gear_pair.yaml", dir + "/load.yaml", dir + "/run.yaml"}));
-}
 
 double gear_exponent(const gd::ModelConfig& c, double separation, double h) {
   gd::GearLaneSpec s{c.gear, c.friction_coefficient, c.load.initial_mean, c.initial};

@@ -9,6 +9,8 @@
 #include "gear_dynamics/dynamics/bifurcation.hpp"
 #include "gear_dynamics/dynamics/poincare.hpp"
 
+#include "paper_config.hpp"
+
 namespace gd = gear_dynamics;
 
 // Free undamped oscillator sampled at its own period: one fixed point, the initial state. The period
@@ -63,15 +65,6 @@ TEST(Poincare, ForcedOscillatorAnalyticSteadyState) {
     EXPECT_NEAR(q.x[1], v, 1e-8 * lanes[q.lane].force);
   }
 }
-
-namespace {
-
-gd::ModelConfig paper_config() {
-  const std::string dir = GEAR_DYNAMICS_CONFIG_DIR;
-  return gd::parse_config(gd::read_yaml_files({dir + "/gear_pair.yaml", dir + "/load.yaml", dir + "/run.yaml"}));
-}
-
-}  // namespace
 
 // GearLanes (a mesh schedule per lane, SIMD packets of lanes when no lane's step is split) steps
 // exactly like the production Ensemble: bit for bit over 50 ms (about 30 impacts), for 8 lanes of

@@ -12,16 +12,9 @@
 #include "gear_dynamics/dynamics/poincare.hpp"
 #include "gear_dynamics/montecarlo/batch.hpp"
 
+#include "paper_config.hpp"
+
 namespace gd = gear_dynamics;
-
-namespace {
-
-gd::ModelConfig paper_config() {
-  const std::string dir = GEAR_DYNAMICS_CONFIG_DIR;
-  return gd::parse_config(gd::read_yaml_files({dir + "/gear_pair.yaml", dir + "/load.yaml", dir + "/run.yaml"}));
-}
-
-}  // namespace
 
 // The batch's /gear/poincare points (engine PoincareSampler, run inside simulate() by run_batch) are
 // the core's poincare_section of the same run, bit for bit: the same times t_k = t_0 + k T_m, the

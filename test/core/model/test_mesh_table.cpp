@@ -13,14 +13,11 @@
 #include "gear_dynamics/model/mesh_schedule.hpp"
 #include "gear_dynamics/model/mesh_table.hpp"
 
+#include "paper_config.hpp"
+
 namespace gd = gear_dynamics;
 
 namespace {
-
-gd::ModelConfig paper_config() {
-  const std::string dir = GEAR_DYNAMICS_CONFIG_DIR;
-  return gd::parse_config(gd::read_yaml_files({dir + "/gear_pair.yaml", dir + "/load.yaml", dir + "/run.yaml"}));
-}
 
 gd::GearPair reversing_square_wave() {
   gd::GearInputs in;

@@ -15,14 +15,11 @@
 #include "gear_dynamics/engine/ensemble.hpp"
 #include "gear_dynamics/monitor/reference.hpp"
 
+#include "paper_config.hpp"
+
 namespace gd = gear_dynamics;
 
 namespace {
-
-gd::ModelConfig paper_config() {
-  const std::string dir = GEAR_DYNAMICS_CONFIG_DIR;
-  return gd::parse_config(gd::read_yaml_files({dir + "/gear_pair.yaml", dir + "/load.yaml", dir + "/run.yaml"}));
-}
 
 std::string temp_path(const std::string& name) {
   return (std::filesystem::temp_directory_path() / ("gd_monitor_" + std::to_string(::getpid()) + "_" + name)).string();
