@@ -60,6 +60,14 @@ BearingsModel::BearingsModel(const GearPair& gear)
       inv_mg_(1.0 / p_.wheel_mass) {}
 
 double friction_share(const GearPair& gear, const MeshTable* table, double a) {
+  if (gear.in.friction_model == FrictionModel::kConstant && gear.in.friction_direction == FrictionDirection::kConstant)
+    return 1.0;
+  if (table && gear.in.mesh_stiffness == MeshStiffnessModel::kPotentialEnergy) {
+    // The potential-energy model costs microseconds per exact evaluation (three per segment and
+    // step): sigma is interpolated from the table, as K, f and e are.
+    const double P = table->period();
+    return table->at(a - std::floor(a / P) * P).share;
+  }
   if (gear.in.friction_model != FrictionModel::kConstant) {
     // A law: each pair by its share and its own mu (a law's mesh always has a table).
     const double P = table->period();
@@ -70,17 +78,7 @@ double friction_share(const GearPair& gear, const MeshTable* table, double a) {
     for (const MeshContact& c : contacts) share += pair_friction_weight(gear, c.x, c.x, c.stiffness / total);
     return share;
   }
-  if (gear.in.friction_direction == FrictionDirection::kConstant) return 1.0;
   const auto sign = [&](double x) { return x >= gear.x_p ? 1.0 : -1.0; };
-  if (table && gear.in.mesh_stiffness == MeshStiffnessModel::kPotentialEnergy) {
-    const double P = table->period();
-    double total = 0.0, share = 0.0;
-    for (const MeshContact& c : table->contacts(a - std::floor(a / P) * P)) {
-      total += c.stiffness;
-      share += c.stiffness * sign(c.x);
-    }
-    return share / total;
-  }
   // The square wave: 1 in single contact, 1/2 each in double contact.
   const double phi = a - std::floor(a / gear.mesh_period_angle) * gear.mesh_period_angle;
   const double ref = sign(gear.x_b + gear.base_radius1 * phi);

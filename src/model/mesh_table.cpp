@@ -134,8 +134,11 @@ MeshTable::Sample MeshTable::evaluate(long m, double phi, double lo, double hi) 
     const double x_next_mid = g.x_a + g.base_radius1 * (mid - g.single_pair_angle);
     s.values.friction = (law_friction(s.ref / K, x_ref, x_ref_mid) +
                          (two ? law_friction(s.next / K, x_next, x_next_mid) : 0.0));
+    s.values.share = pair_friction_weight(g, x_ref, x_ref_mid, s.ref / K) +
+                     (two ? pair_friction_weight(g, x_next, x_next_mid, s.next / K) : 0.0);
   } else if (g.in.friction_direction == FrictionDirection::kConstant) {
     s.values.friction = g.friction_factor(phi);  // the paper's reference pair (doc/model.md D4)
+    s.values.share = 1.0;
   } else {
     // Each pair's friction by its share of the force, its sign that of its sliding velocity (the
     // side of the pitch point it is on, taken at the piece's middle).
@@ -146,6 +149,8 @@ MeshTable::Sample MeshTable::evaluate(long m, double phi, double lo, double hi) 
     const double x_next_mid = g.x_a + g.base_radius1 * (mid - g.single_pair_angle);
     s.values.friction = (s.ref * signed_factor(x_ref, x_ref_mid) +
                          (two ? s.next * signed_factor(x_next, x_next_mid) : 0.0)) / K;
+    const auto sign = [&](double x_mid) { return x_mid >= g.x_p ? 1.0 : -1.0; };
+    s.values.share = (s.ref * sign(x_ref_mid) + (two ? s.next * sign(x_next_mid) : 0.0)) / K;
   }
   s.values.error = (s.ref * pair_error(m) + s.next * pair_error(m + 1)) / K;
   return s;
@@ -201,7 +206,7 @@ MeshTable::Values MeshTable::at(int piece, double a) const {
   const Values& lo = values_[p.first + k];
   const Values& hi = values_[p.first + k + 1];
   return {lo.stiffness + w * (hi.stiffness - lo.stiffness), lo.friction + w * (hi.friction - lo.friction),
-          lo.error + w * (hi.error - lo.error)};
+          lo.error + w * (hi.error - lo.error), lo.share + w * (hi.share - lo.share)};
 }
 
 double MeshTable::error_slope(int piece, double a) const {

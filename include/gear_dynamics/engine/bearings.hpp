@@ -114,7 +114,8 @@ class BearingsModel {
 // sigma = sum_j s_j lambda_j at the unwrapped pinion angle a: the friction force across the LOA per
 // unit mu F_m. 1 for the paper's constant friction (D5: mu times the whole mesh force); with
 // friction_direction reversing, each pair's load share with the sign of its sliding velocity
-// (+1 beyond the pitch point). `table` is the schedule's (null on the paper's mesh).
+// (+1 beyond the pitch point). `table` is the schedule's (null on the paper's mesh); on the
+// potential-energy mesh sigma is its interpolated column (MeshTable::Values::share).
 double friction_share(const GearPair& gear, const MeshTable* table, double a);
 
 // The outputs of one state (doc/model.md §11), SI.

@@ -34,6 +34,10 @@ class MeshTable {
     double stiffness = 0.0;  // K [N/m]
     double friction = 0.0;   // f [1/kg]
     double error = 0.0;      // e [m]
+    // sigma: the bearings model's friction force across the line of action per unit mu and mesh
+    // force [-] (friction_share in engine/bearings.hpp): each pair's share of the force with its
+    // sign (reversing) or its law's weight. Tabulated, not refined on: K, f and e set the nodes.
+    double share = 0.0;
   };
 
   // Tabulates `gear`'s mesh: each piece between two jumps (a pair entering or leaving, a spall's

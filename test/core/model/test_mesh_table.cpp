@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "gear_dynamics/config/config.hpp"
+#include "gear_dynamics/model/friction_law.hpp"
 #include "gear_dynamics/model/mesh_schedule.hpp"
 #include "gear_dynamics/model/mesh_table.hpp"
 
@@ -208,5 +209,38 @@ TEST(MeshTable, InterpolationWithinATenthOfAPercent) {
   EXPECT_LT(worst, 1e-3);
   std::printf("table: %d pieces, %d nodes over %d mesh periods; largest interpolation error %.2e of K\n",
               t.pieces(), t.nodes(), t.mesh_periods(), worst);
+}
+
+// The bearings model's friction share sigma, tabulated beside K on the nodes K sets: within 1e-3
+// (of its scale, 1) of sigma computed independently from the exact contacts, sum_j s_j k_j / K with
+// s_j the side of the pitch point (reversing), and sum_j of the law's weight of each pair's share.
+TEST(MeshTable, FrictionShareInterpolatedWithinATenthOfAPercent) {
+  for (gd::FrictionModel law : {gd::FrictionModel::kConstant, gd::FrictionModel::kBenedictKelley}) {
+    gd::GearInputs in;
+    in.mesh_stiffness = gd::MeshStiffnessModel::kPotentialEnergy;
+    in.friction_direction = gd::FrictionDirection::kReversing;
+    in.friction_model = law;
+    in.crack = {gd::FaultyGear::kPinion, 3, 1.0e-3, 0.7853981633974483};
+    const gd::GearPair g = gd::derive(in);
+    const gd::MeshTable t(g);
+    double worst = 0.0, lowest = 1.0, highest = -1.0;
+    for (int i = 0; i < 20000; ++i) {
+      const double a = (i + 0.37) * t.period() / 20000;
+      double total = 0.0, sigma = 0.0;
+      const std::vector<gd::MeshContact> contacts = t.contacts(a);
+      for (const gd::MeshContact& c : contacts) total += c.stiffness;
+      for (const gd::MeshContact& c : contacts)
+        sigma += law == gd::FrictionModel::kConstant ? (c.x >= g.x_p ? 1.0 : -1.0) * c.stiffness / total
+                                                     : gd::pair_friction_weight(g, c.x, c.x, c.stiffness / total);
+      const double tabulated = t.at(a).share;
+      worst = std::max(worst, std::abs(tabulated - sigma));
+      lowest = std::min(lowest, tabulated), highest = std::max(highest, tabulated);
+    }
+    EXPECT_LT(worst, 1e-3) << "law " << static_cast<int>(law);
+    EXPECT_LT(lowest, 0.0);  // it reverses
+    EXPECT_GT(highest, 0.0);
+    std::printf("sigma (%s): largest interpolation error %.2e, range [%.3f, %.3f]\n",
+                law == gd::FrictionModel::kConstant ? "reversing" : "benedict_kelley", worst, lowest, highest);
+  }
 }
 
