@@ -106,13 +106,15 @@ py::dict simulate(const std::vector<std::string>& files, const std::vector<std::
   recorder.record = [&](const gd::Ensemble& e, const Eigen::ArrayXd& d) {
     if (record_every > 0 && e.step_index() % record_every == 0) {
       t.push_back(gd::grid_time(e.step_index(), e.time_step()));
+      const gd::model_step::MeshPoint mesh =
+          bearings ? gd::output_mesh_point(e.mesh(), e.time()) : gd::model_step::MeshPoint{};
       for (int i = 0; i < e.lanes(); ++i) {
         delta.push_back(e.delta()[i]);
         delta_dot.push_back(e.velocity()[i]);
         phi.push_back(e.load()[i]);
         dist.push_back(d[i]);
         if (bearings) {
-          const gd::BearingsOutputs o = gd::bearings_outputs(e, i);
+          const gd::BearingsOutputs o = gd::bearings_outputs(e, mesh, i);
           for (std::size_t k = 0; k < outputs.size(); ++k) outputs[k].push_back(o.*gd::kBearingsOutputs[k].value);
         }
       }

@@ -117,11 +117,12 @@ int bearings_step(const BearingsModel& model, const GearPair& gear, const MeshSc
 
 BearingsOutputs bearings_outputs(const BearingsModel& model, const GearPair& gear, const MeshSchedule& mesh,
                                  double h, std::int64_t n, const BearingsModel::State& y) {
-  const double t = static_cast<double>(n) * h;
-  const double e = mesh.transmission_error(t);
-  // The rate the stepping integrates e with (the table's slope), so F_m is the force of the derivative.
-  const double e_dot = mesh.transmission_error_rate(t);
-  return bearings_outputs(model, gear, model_step::MeshPoint{mesh.stiffness(t), 0.0, 0.0, 0.0, e, e_dot}, y);
+  return bearings_outputs(model, gear, output_mesh_point(mesh, static_cast<double>(n) * h), y);
+}
+
+model_step::MeshPoint output_mesh_point(const MeshSchedule& mesh, double t) {
+  // e's rate as the stepping integrates e (the table's slope), so F_m is the force of the derivative.
+  return {mesh.stiffness(t), 0.0, 0.0, 0.0, mesh.transmission_error(t), mesh.transmission_error_rate(t)};
 }
 
 BearingsOutputs bearings_outputs(const BearingsModel& model, const GearPair& gear, const model_step::MeshPoint& p,
@@ -152,10 +153,9 @@ const BearingsOutputSpec* find_bearings_output(const std::string& name) {
   return nullptr;
 }
 
-BearingsOutputs bearings_outputs(const Ensemble& ensemble, int lane) {
+BearingsOutputs bearings_outputs(const Ensemble& ensemble, const model_step::MeshPoint& mesh_point, int lane) {
   const BearingsModel::State y = ensemble.model_state().col(lane);
-  return bearings_outputs(*ensemble.bearings_model(), ensemble.gear(), ensemble.mesh(), ensemble.time_step(),
-                          ensemble.step_index(), y);
+  return bearings_outputs(*ensemble.bearings_model(), ensemble.gear(), mesh_point, y);
 }
 
 BearingsRealization::BearingsRealization(const GearPair& gear, double time_step, const InitialState& initial,

@@ -19,8 +19,9 @@ class BearingForceSums {
         sum_(Eigen::ArrayXXd::Zero(static_cast<Eigen::Index>(forces_.size()), lanes)),
         square_(sum_) {}
   void observe(const Ensemble& e) {
+    const model_step::MeshPoint mesh = output_mesh_point(e.mesh(), e.time());
     for (int i = 0; i < e.lanes(); ++i) {
-      const BearingsOutputs o = bearings_outputs(e, i);
+      const BearingsOutputs o = bearings_outputs(e, mesh, i);
       for (std::size_t k = 0; k < forces_.size(); ++k) {
         const double f = o.*forces_[k].value;
         sum_(k, i) += f;

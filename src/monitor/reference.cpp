@@ -176,15 +176,13 @@ std::vector<std::vector<RevolutionWindow>> simulate_windows(const ModelConfig& c
       const std::int64_t k = ensemble.step_index();
       if (k < first_recorded || k % m.decimation != 0) continue;
       const double t = ensemble.time(), angle = shaft_angle(gear, t);
-      // The mesh at t is the block's, not a lane's: looked up once for all lanes.
-      const model_step::MeshPoint mesh{ensemble.mesh().stiffness(t), 0.0, 0.0, 0.0,
-                                       ensemble.mesh().transmission_error(t), ensemble.mesh().transmission_error_rate(t)};
+      const model_step::MeshPoint mesh = output_mesh_point(ensemble.mesh(), t);  // the block's, for all lanes
       for (int i = 0; i < lanes; ++i) {
         auto& mine = out[b0 + i];
         if (static_cast<int>(mine.size()) >= windows) continue;
         const double value =
             spec.bearing_force
-                ? bearings_outputs(*ensemble.bearings_model(), gear, mesh, ensemble.model_state().col(i)).*spec.bearing_force
+                ? bearings_outputs(ensemble, mesh, i).*spec.bearing_force
                 : state_signal(gear, m.signal, mesh.stiffness, mesh.error, mesh.error_rate, ensemble.padded_delta()(i),
                                ensemble.padded_velocity()(i));
         if (auto w = cut[i].add(angle, value, ensemble.load()(i))) mine.push_back(std::move(*w));

@@ -224,12 +224,14 @@ void BagSink::recorded(const std::vector<RunSpec>& block, const Ensemble& ensemb
                        const Eigen::ArrayXd& center_distance) {
   std::vector<Item> items;
   items.reserve(block.size());
+  const bool bearings = ensemble.model_state().size() > 0;  // gear_pair.model = bearings
+  const double t = grid_time(ensemble.step_index(), ensemble.time_step());
+  const model_step::MeshPoint mesh = bearings ? output_mesh_point(ensemble.mesh(), ensemble.time()) : model_step::MeshPoint{};
   for (std::size_t i = 0; i < block.size(); ++i) {
     const int lane = static_cast<int>(i);
     items.push_back({block[i].id, make_state(ensemble, lane, center_distance[lane])});
-    if (ensemble.model_state().size() > 0) {  // gear_pair.model = bearings
-      const double t = grid_time(ensemble.step_index(), ensemble.time_step());
-      const BearingsOutputs o = bearings_outputs(ensemble, lane);
+    if (bearings) {
+      const BearingsOutputs o = bearings_outputs(ensemble, mesh, lane);
       items.push_back({block[i].id, BearingsSample{make_mesh_state(t, o, ensemble.model_state()(BearingsModel::kDelta, lane)),
                                                    make_bearing_wrench(t, kPinionBearingFrame, o.pinion_fx, o.pinion_fy),
                                                    make_bearing_wrench(t, kWheelBearingFrame, o.wheel_fx, o.wheel_fy)}});

@@ -187,11 +187,13 @@ int main(int argc, char** argv) try {
     if (csv) {
       recorder.every = std::max<std::int64_t>(1, std::llround(1.0 / (opt.rate * pc.run.time_step)));
       recorder.record = [&](const gd::Ensemble& e, const Eigen::ArrayXd& d) {
+        const gd::model_step::MeshPoint mesh =
+            bearings ? gd::output_mesh_point(e.mesh(), e.time()) : gd::model_step::MeshPoint{};
         for (int i = 0; i < e.lanes(); ++i) {
           *csv << names[i] << ',' << gd::grid_time(e.step_index(), e.time_step()) << ',' << e.delta()[i] << ','
                << e.velocity()[i] << ',' << e.load()[i] << ',' << d[i];
           if (bearings) {
-            const gd::BearingsOutputs o = gd::bearings_outputs(e, i);
+            const gd::BearingsOutputs o = gd::bearings_outputs(e, mesh, i);
             for (const gd::BearingsOutputSpec& s : gd::kBearingsOutputs) *csv << ',' << o.*s.value;
           }
           *csv << '\n';

@@ -171,14 +171,17 @@ int bearings_step(const BearingsModel& model, const GearPair& gear, const MeshSc
 // The outputs of state y at grid step n (doc/model.md §11).
 BearingsOutputs bearings_outputs(const BearingsModel& model, const GearPair& gear, const MeshSchedule& mesh,
                                  double time_step, std::int64_t n, const BearingsModel::State& y);
-// The same with the mesh at y's time given: K, e and e's rate in `mesh_point` (its other fields
-// unused), looked up once for the lanes of an ensemble.
+// The schedule's K, e and e's rate at time t, what the outputs read of the mesh (the point's other
+// fields unused): looked up once per instant for all the lanes of an ensemble.
+model_step::MeshPoint output_mesh_point(const MeshSchedule& mesh, double t);
+// The same with the mesh at y's time given (output_mesh_point).
 BearingsOutputs bearings_outputs(const BearingsModel& model, const GearPair& gear,
                                  const model_step::MeshPoint& mesh_point, const BearingsModel::State& y);
+// The same for lane i of an ensemble of the bearings model (Ensemble::model_state()) at its time,
+// `mesh_point` = output_mesh_point(ensemble.mesh(), ensemble.time()).
+BearingsOutputs bearings_outputs(const Ensemble& ensemble, const model_step::MeshPoint& mesh_point, int lane);
 // The error a bearings realization's non-finite state throws.
 DivergenceError bearings_divergence(std::uint64_t realization, int lane, double delta_m, double time);
-// The same for lane i of an ensemble of the bearings model (Ensemble::model_state()).
-BearingsOutputs bearings_outputs(const Ensemble& ensemble, int lane);
 
 // One realization of the bearings model, as Realization is one of the torsional model (the
 // interface of RealizationBase): the same mesh plan, the same random stream NormalStream(seed,

@@ -91,7 +91,7 @@ class Ensemble {
   const Eigen::ArrayXd& padded_delta() const { return delta_; }
   const Eigen::ArrayXd& padded_velocity() const { return velocity_; }
   // The whole state of each lane of a model with more than (delta, delta_dot), one column per lane
-  // (BearingsModel::State; bearings_outputs(ensemble, lane) reads it); empty for the torsional model.
+  // (BearingsModel::State; bearings_outputs(ensemble, mesh_point, lane) reads it); empty for the torsional model.
   auto model_state() const { return model_state_.leftCols(bearings_ ? lanes() : 0); }
 
   // Run-time changes; they take effect at the next step boundary.

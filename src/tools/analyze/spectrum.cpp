@@ -133,12 +133,12 @@ SpectrumInput Spectrum::simulate(const Common& c) const {
     const std::int64_t N = cfg.run.steps(), n0 = std::llround(transient / h);
     for (std::int64_t n = 0; n <= N; ++n) {
       if (n >= n0 && (n - n0) % k == 0) {
-        const double t = e.time(), K = e.mesh().stiffness(t), err = e.mesh().transmission_error(t),
-                     rate = e.mesh().transmission_error_rate(t);
+        const model_step::MeshPoint mesh = output_mesh_point(e.mesh(), e.time());
         for (int l = 0; l < last - first; ++l) {
           delta[first + l].push_back(e.delta()[l]);
-          force[first + l].push_back(output ? bearings_outputs(e, l).*output->value
-                                            : mesh_force(g, K, e.delta()[l], e.velocity()[l], err, rate));
+          force[first + l].push_back(output ? bearings_outputs(e, mesh, l).*output->value
+                                            : mesh_force(g, mesh.stiffness, e.delta()[l], e.velocity()[l], mesh.error,
+                                                         mesh.error_rate));
         }
       }
       if (n < N) e.step();

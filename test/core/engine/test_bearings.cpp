@@ -480,7 +480,7 @@ TEST(Bearings, EnsembleLanesAreTheRealizations) {
     }
   }
   EXPECT_GT(crossings, 11) << "the lanes must have impacts for the test to cover the crossing search";
-  const gd::BearingsOutputs a = gd::bearings_outputs(whole, 7), b = alone[7].outputs();
+  const gd::BearingsOutputs a = gd::bearings_outputs(whole, gd::output_mesh_point(whole.mesh(), whole.time()), 7), b = alone[7].outputs();
   EXPECT_EQ(std::memcmp(&a, &b, sizeof a), 0);
 }
 
