@@ -36,8 +36,6 @@ class LaneSystem {
 
 // --- the gear model (state: delta [m], delta_dot [m/s]; the load is constant per lane) ---
 
-// The production engine as a LaneSystem. Only deterministic lanes (LaneSpec::stochastic = false)
-// make a deterministic system; stochastic lanes step too but are not meant for Lyapunov exponents.
 // The bearings model's lanes of an Ensemble (gear_pair.model = bearings) with their whole state,
 // BearingsModel::State's ten components: the largest Lyapunov exponent of the full state.
 class BearingsLanes : public LaneSystem {
@@ -56,6 +54,8 @@ class BearingsLanes : public LaneSystem {
   Ensemble& e_;
 };
 
+// The production engine as a LaneSystem. Only deterministic lanes (LaneSpec::stochastic = false)
+// make a deterministic system; stochastic lanes step too but are not meant for Lyapunov exponents.
 class EnsembleLanes : public LaneSystem {
  public:
   explicit EnsembleLanes(Ensemble& ensemble) : e_(ensemble) {}

@@ -86,9 +86,7 @@ class Lyapunov : public Subcommand {
 
 int Lyapunov::run(const Common& common) {
   const ModelConfig c = load_config(common);
-  if (c.gear.model == GearModel::kBearings && method_ == "tangent")
-    throw std::runtime_error("gear_analyze lyapunov --method tangent takes gear_pair.model = torsional only (given: "
-                             "bearings); --method pairs gives the bearings model's largest exponent of its whole state");
+  if (method_ == "tangent") require_torsional(c, "lyapunov --method tangent");
   const double h = c.run.time_step / step_divisor_;
   const LyapunovRuns r = runs(c);
   return method_ == "tangent" ? tangent(common, c, h, r) : pairs(common, c, h, r);
