@@ -1,5 +1,6 @@
 #include "gear_dynamics/dynamics/bifurcation.hpp"
 
+#include "gear_dynamics/engine/bearings.hpp"
 #include "gear_dynamics/model/mesh_table.hpp"
 
 #include <tbb/parallel_for.h>
@@ -58,12 +59,41 @@ int detect_period(const std::vector<SectionState>& pts, int max_period, const st
 
 namespace {
 
+// The period is tested on the whole state: every displacement within tolerance * b, every rate
+// within tolerance * v_ref (the state's components alternate displacement, rate).
 void classify(ScanValue& v, const ScanOptions& o, const GearInputs& gear, double b, double vref) {
-  v.period = detect_period(v.points, period_search_limit(gear, o.max_period), {o.tolerance * b, o.tolerance * vref});
+  std::vector<double> tolerance;
+  for (std::size_t c = 0; c < (v.points.empty() ? 2 : v.points.front().x.size()); ++c)
+    tolerance.push_back(o.tolerance * (c % 2 == 0 ? b : vref));
+  v.period = detect_period(v.points, period_search_limit(gear, o.max_period), tolerance);
   const std::string motion = v.period > 0 ? "period-" + std::to_string(v.period) : "aperiodic";
   if (v.min_gap > 0) v.regime = motion + ", no separation";
   else if (v.min_delta >= -b) v.regime = motion + ", single-sided impacts";
   else v.regime = motion + ", double-sided impacts";
+}
+
+// One value of a scan of the bearings model: a lane of the engine's ensemble with its whole state
+// sampled (BearingsLanes); min_delta is that of the mesh deflection delta_m.
+std::vector<SectionState> bearings_section(const ModelConfig& c, const ScanOptions& o, double& min_delta) {
+  Ensemble e(derive(c.gear), c.run.time_step, c.initial, {deterministic_lane(c, c.friction_coefficient)}, c.seed);
+  BearingsLanes sys(e);
+  const BearingsModel& model = *e.bearings_model();
+  const std::int64_t n_start = std::llround(o.transient / c.run.time_step);
+  min_delta = std::numeric_limits<double>::infinity();
+  const auto track = [&](const LaneSystem&) {
+    if (e.step_index() < n_start) return;
+    const BearingsModel::State y = e.model_state().col(0);
+    min_delta = std::min(min_delta, model.deflection(y));
+  };
+  return poincare_section(sys, {mesh_period(e.gear()), 0.0, o.transient, o.duration, {}}, track);
+}
+
+// The bearings model's points as the scan reports them: (delta_m, delta_m_dot).
+void to_mesh_deflection(std::vector<SectionState>& points, const BearingsModel& model) {
+  for (SectionState& p : points) {
+    const BearingsModel::State y = Eigen::Map<const BearingsModel::State>(p.x.data());
+    p.x = {model.deflection(y), model.deflection_rate(y)};
+  }
 }
 
 }  // namespace
@@ -78,6 +108,19 @@ std::vector<ScanValue> bifurcation_scan(const ModelConfig& base, ScanParameter p
     configs.push_back(c);
   }
   std::vector<ScanValue> out(values.size());
+  if (base.gear.model == GearModel::kBearings) {
+    tbb::parallel_for(std::size_t(0), values.size(), [&](std::size_t i) {
+      ScanValue& v = out[i];
+      v.value = values[i];
+      v.points = bearings_section(configs[i], o, v.min_delta);
+      const double b = configs[i].gear.backlash;
+      v.min_gap = v.min_delta - b;
+      classify(v, o, configs[i].gear, b, std::sqrt(2.0 * std::abs(configs[i].load.initial_mean) * b));
+      to_mesh_deflection(v.points, BearingsModel(derive(configs[i].gear)));
+      for (SectionState& p : v.points) p.lane = 0;
+    });
+    return out;
+  }
   const bool shared = param == ScanParameter::Load || param == ScanParameter::Friction;
   const int per_block = std::max(1, o.block_lanes);
   const std::size_t blocks = (values.size() + per_block - 1) / per_block;

@@ -3,7 +3,9 @@
 // Poincare points (delta, delta_dot) once per mesh period at the initial mesh phase. Values that
 // share the mesh schedule (mean load, mu) run as lanes of one production Ensemble block; values that
 // change it (pinion speed, damping ratio, which sets alpha for every lane of an Ensemble) run as
-// GearLanes blocks (a schedule and a sampling period per lane). Blocks run in parallel (TBB).
+// GearLanes blocks (a schedule and a sampling period per lane). Blocks run in parallel (TBB). The
+// bearings model (gear_pair.model) runs each value as a lane of its own with its whole state
+// sampled: its period is tested on all ten components, its points are (delta_m, delta_m_dot).
 #pragma once
 
 #include <string>

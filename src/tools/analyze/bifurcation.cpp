@@ -31,7 +31,6 @@ class Bifurcation : public Subcommand {
 
 int Bifurcation::run(const Common& c) {
   const ModelConfig cfg = load_config(c);
-  require_torsional(cfg, name());
   const ScanParameter p = parse_scan_parameter(range_.parameter);
   const std::vector<double> values = parameter_values(range_);
   ScanOptions so;
