@@ -277,7 +277,8 @@ py::dict poincare(const std::vector<std::string>& files, const std::vector<std::
   return out;
 }
 
-// S1's Lyapunov spectrum (lambda1, lambda2) by QR of the tangent map (dynamics/lyapunov.hpp).
+// S1's Lyapunov spectrum (lambda1 >= lambda2 ..., one per state component: two for the torsional
+// model, ten for the bearings model) by QR of the tangent map (dynamics/lyapunov.hpp).
 py::dict lyapunov(const std::vector<std::string>& files, const std::vector<std::string>& sets, std::optional<double> mu,
                   double duration, std::int64_t orthonormalise_every) {
   const gd::ModelConfig c = gd::parse_config(model_root(files, sets, mu, std::nullopt));
@@ -285,14 +286,13 @@ py::dict lyapunov(const std::vector<std::string>& files, const std::vector<std::
   gd::SpectrumOptions o;
   o.duration = duration;
   o.orthonormalise_every = orthonormalise_every;
-  o.scale = {c.gear.backlash, std::sqrt(2.0 * std::abs(c.load.initial_mean) * c.gear.backlash)};  // gear_analyze's
   gd::LyapunovSpectrum r;
   {
     py::gil_scoped_release release;
     r = gd::lyapunov_spectrum(s1_lane(c), c.run.time_step, o);
   }
   py::dict out;
-  out["exponents"] = std::vector<double>{r.exponent[0], r.exponent[1]};
+  out["exponents"] = r.exponent;
   out["trace"] = r.trace;
   out["time"] = vec(r.time);
   out["running"] = vec(r.running);

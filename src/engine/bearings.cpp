@@ -88,31 +88,7 @@ double friction_share(const GearPair& gear, const MeshTable* table, double a) {
 
 int bearings_step(const BearingsModel& model, const GearPair& gear, const MeshSchedule& mesh, double h, double mu,
                   std::int64_t n, double load0, double load1, BearingsModel::State& y) {
-  const StepPlan plan = mesh.plan(n);
-  const double q3 = gear.q3;
-  const double speed = gear.in.pinion_speed, a_start = gear.in.mesh_phase + speed * static_cast<double>(n) * h;
-  const MeshTable* table = mesh.table();
-  int crossings = 0;
-  for (int k = 0; k < plan.segments; ++k) {
-    const StepSegment& seg = plan.segment[k];
-    const double H = (seg.end - seg.begin) * h;
-    const kernel::SegmentLoads<double> l = kernel::segment_loads<double>(seg, q3, mu, load0, load1);
-    // sigma at the stage times, a billionth of the segment inside it (its side of a jump).
-    const double inset = 1e-9 * (seg.end - seg.begin);
-    const auto share = [&](double u) {
-      return mu == 0.0 ? 0.0 : mu * friction_share(gear, table, a_start + speed * h * u);
-    };
-    const double e_dot = (seg.error_end - seg.error_start) / H;
-    const double mid = 0.5 * (seg.begin + seg.end);
-    model_step::Segment s{H,
-                          gear.in.backlash,
-                          {seg.stiffness_start, l.qa, share(seg.begin + inset), l.la, seg.error_start, e_dot},
-                          {seg.stiffness_mid, l.qm, share(mid), 0.5 * (l.la + l.lb),
-                           0.5 * (seg.error_start + seg.error_end), e_dot},
-                          {seg.stiffness_end, l.qb, share(seg.end - inset), l.lb, seg.error_end, e_dot}};
-    crossings += model_step::located_segment(model, s, y);
-  }
-  return crossings;
+  return bearings_step_of(model, gear, mesh, h, mu, n, load0, load1, y);
 }
 
 BearingsOutputs bearings_outputs(const BearingsModel& model, const GearPair& gear, const MeshSchedule& mesh,

@@ -1,6 +1,6 @@
-// Lyapunov exponents of the gear model (doc/nonlinear-dynamics.md §4): both exponents of the
-// (delta, delta_dot) flow from the variational equation, carried through the production kernel's
-// located sub-steps, and the two-trajectory estimate of the largest one as a cross-check.
+// Lyapunov exponents of the gear models (doc/nonlinear-dynamics.md §4): every exponent of the flow
+// from the variational equation, carried through the production arithmetic's located sub-steps,
+// and the two-trajectory estimate of the largest one as a cross-check.
 #pragma once
 
 #include <cstdint>
@@ -10,38 +10,45 @@
 
 namespace gear_dynamics {
 
-// --- both exponents from the tangent flow (Benettin et al. 1980, Shimada & Nagashima 1979) ---
-// Two tangent vectors start as the unit vectors of the scaled state (delta/scale[0],
-// delta_dot/scale[1]) at t = 0 and are Gram-Schmidt orthonormalised in that norm every
-// `orthonormalise_every` steps and at every window edge; the logarithms of the diagonal of R,
-// summed over an interval and divided by its length, are its two exponents. The field is
-// continuous across |delta| = b, so a crossing's saltation matrix is the identity.
+// --- every exponent from the tangent flow (Benettin et al. 1980, Shimada & Nagashima 1979) ---
+// One tangent vector per state component (two for the torsional model's (delta, delta_dot), ten
+// for the bearings model's state) starts as a unit vector of the scaled state (x_c / scale_c) at
+// t = 0; they are Gram-Schmidt orthonormalised in that norm every `orthonormalise_every` steps and
+// at every window edge; the logarithms of the diagonal of R, summed over an interval and divided
+// by its length, are its exponents. The field is continuous across |delta_m| = b, so a crossing's
+// saltation matrix is the identity. The sum of the exponents is the time average of the
+// Jacobian's trace (Liouville): the check of every run.
 struct SpectrumOptions {
   double duration = 1.2;                  // [s], from t = 0
   std::int64_t orthonormalise_every = 100;  // steps
-  std::vector<double> scale;              // (delta, delta_dot) units of the norm; empty: (b, sqrt(2 Phi b))
+  // Units of the norm, one per state component; empty: b for a displacement, sqrt(2 Phi b) for a rate.
+  std::vector<double> scale;
   std::vector<double> windows;            // window edges [s] in increasing order (grid points)
   std::int64_t record_every = 10;         // orthonormalisations per point of the running estimate
 };
 
 struct SpectrumWindow {
   double start = 0, end = 0;     // [s]
-  double exponent[2] = {0, 0};   // lambda1 >= lambda2 over the window [1/s]
+  // The exponents over the window [1/s] in the QR order, the descending order of the long-time limit
+  // (over a finite time nearly equal ones, e.g. two bearing modes, may come out of order).
+  std::vector<double> exponent;
   double trace = 0;              // time average of the Jacobian's trace over the window [1/s]
 };
 
-// The sums at a window edge: ln r11, ln r22 and the trace's integral, accumulated from t = 0.
+// The sums at a window edge: ln r_kk and the trace's integral, accumulated from t = 0.
 struct SpectrumEdge {
-  double time = 0, log_r[2] = {0, 0}, trace_integral = 0;
+  double time = 0;
+  std::vector<double> log_r;
+  double trace_integral = 0;
 };
 
 struct LyapunovSpectrum {
-  double exponent[2] = {0, 0};  // over [0, duration] [1/s]
-  double trace = 0;             // time average of tr J over [0, duration] [1/s] (= lambda1 + lambda2)
+  std::vector<double> exponent;  // over [0, duration] [1/s], one per state component
+  double trace = 0;              // time average of tr J over [0, duration] [1/s] (= the exponents' sum)
   std::vector<SpectrumEdge> edges;
   std::vector<SpectrumWindow> windows;  // between consecutive edges
   std::vector<double> time, running;    // running estimate of lambda1 over [0, t]
-  // The last grid time at which delta - e <= b (teeth apart or on the back flank) [s]; 0 if never
+  // The last grid time at which delta_m - e <= b (teeth apart or on the back flank) [s]; 0 if never
   // after t = 0. A run with duration - last_separation long is in permanent contact since then.
   double last_separation = 0;
 };
@@ -49,8 +56,9 @@ struct LyapunovSpectrum {
 // The exponents over [from.time, to.time] from the sums at two edges.
 SpectrumWindow window_between(const SpectrumEdge& from, const SpectrumEdge& to);
 
-// One spectrum per lane: each lane a deterministic gear with its own gear inputs, mu, constant load
-// and initial state, stepped with the production kernel at `time_step`.
+// One lane's spectrum: a deterministic gear with its own gear inputs (gear_pair.model: torsional,
+// two exponents, or bearings, ten), mu, constant load and initial state, stepped with the
+// production arithmetic at `time_step` (the torsional kernel's located steps, or bearings_step's).
 LyapunovSpectrum lyapunov_spectrum(const GearLaneSpec& lane, double time_step, const SpectrumOptions& options);
 
 // --- largest exponent: two trajectories with periodic renormalisation (Benettin 1980) ---

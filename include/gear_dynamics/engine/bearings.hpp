@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "gear_dynamics/engine/ensemble.hpp"
@@ -103,6 +104,35 @@ class BearingsModel {
     dy[kWheelYDot] = ((F - k_ * y[kWheelY]) - cg_ * y[kWheelYDot]) * inv_mg_;
   }
 
+  // d derivative / d y on `branch` (the tangent flow's matrix, doc/nonlinear-dynamics.md §4).
+  using Jacobian = Eigen::Matrix<double, kStates, kStates>;
+  Jacobian jacobian(int branch, const State& y, const model_step::MeshPoint& p) const {
+    State dF = State::Zero();  // d F_m / d y
+    if (branch != 0) {
+      const double side = branch > 0 ? 1.0 : -1.0;
+      const double g = (deflection(y) - p.error) - side * b_;
+      const double by_deflection = p.stiffness + alpha_ * side * (deflection_rate(y) - p.error_rate);
+      const double by_rate = alpha_ * side * g;
+      dF[kDelta] = dF[kPinionY] = by_deflection;
+      dF[kWheelY] = -by_deflection;
+      dF[kDeltaDot] = dF[kPinionYDot] = by_rate;
+      dF[kWheelYDot] = -by_rate;
+    }
+    Jacobian J = Jacobian::Zero();
+    for (int c : {kDelta, kPinionX, kPinionY, kWheelX, kWheelY}) J(c, c + 1) = 1.0;
+    J.row(kDeltaDot) = -p.q * dF.transpose();
+    J.row(kPinionXDot) = p.friction_force * inv_mp_ * dF.transpose();
+    J.row(kPinionYDot) = -inv_mp_ * dF.transpose();
+    J.row(kWheelXDot) = -p.friction_force * inv_mg_ * dF.transpose();
+    J.row(kWheelYDot) = inv_mg_ * dF.transpose();
+    for (auto [u, c, inv_m] : {std::tuple{kPinionX, cp_, inv_mp_}, std::tuple{kPinionY, cp_, inv_mp_},
+                               std::tuple{kWheelX, cg_, inv_mg_}, std::tuple{kWheelY, cg_, inv_mg_}}) {
+      J(u + 1, u) -= k_ * inv_m;
+      J(u + 1, u + 1) -= c * inv_m;
+    }
+    return J;
+  }
+
   const BearingParameters& bearings() const { return p_; }
   double backlash() const { return b_; }
 
@@ -167,6 +197,39 @@ const BearingsOutputSpec* find_bearings_output(const std::string& name);
 // crossings of delta_m through +-b (+ e) located.
 int bearings_step(const BearingsModel& model, const GearPair& gear, const MeshSchedule& mesh, double time_step,
                   double mu, std::int64_t n, double load0, double load1, BearingsModel::State& y);
+
+// bearings_step for any model of the seam whose mesh is the bearings model's (its MeshPoints): the
+// bearings model itself, or one that carries more along its state (the tangent flow,
+// dynamics/lyapunov.cpp), stepped through the same located segments.
+template <class M>
+int bearings_step_of(const M& model, const GearPair& gear, const MeshSchedule& mesh, double h, double mu,
+                     std::int64_t n, double load0, double load1, typename M::State& y) {
+  const StepPlan plan = mesh.plan(n);
+  const double q3 = gear.q3;
+  const double speed = gear.in.pinion_speed, a_start = gear.in.mesh_phase + speed * static_cast<double>(n) * h;
+  const MeshTable* table = mesh.table();
+  int crossings = 0;
+  for (int k = 0; k < plan.segments; ++k) {
+    const StepSegment& seg = plan.segment[k];
+    const double H = (seg.end - seg.begin) * h;
+    const kernel::SegmentLoads<double> l = kernel::segment_loads<double>(seg, q3, mu, load0, load1);
+    // sigma at the stage times, a billionth of the segment inside it (its side of a jump).
+    const double inset = 1e-9 * (seg.end - seg.begin);
+    const auto share = [&](double u) {
+      return mu == 0.0 ? 0.0 : mu * friction_share(gear, table, a_start + speed * h * u);
+    };
+    const double e_dot = (seg.error_end - seg.error_start) / H;
+    const double mid = 0.5 * (seg.begin + seg.end);
+    model_step::Segment s{H,
+                          gear.in.backlash,
+                          {seg.stiffness_start, l.qa, share(seg.begin + inset), l.la, seg.error_start, e_dot},
+                          {seg.stiffness_mid, l.qm, share(mid), 0.5 * (l.la + l.lb),
+                           0.5 * (seg.error_start + seg.error_end), e_dot},
+                          {seg.stiffness_end, l.qb, share(seg.end - inset), l.lb, seg.error_end, e_dot}};
+    crossings += model_step::located_segment(model, s, y);
+  }
+  return crossings;
+}
 
 // The outputs of state y at grid step n (doc/model.md §11).
 BearingsOutputs bearings_outputs(const BearingsModel& model, const GearPair& gear, const MeshSchedule& mesh,

@@ -12,12 +12,6 @@
 
 namespace gear_dynamics::tools::analyze {
 
-void require_torsional(const ModelConfig& config, const std::string& subcommand) {
-  if (config.gear.model == GearModel::kTorsional) return;
-  throw std::runtime_error("gear_analyze " + subcommand + " takes gear_pair.model = torsional only (given: bearings); "
-                           "spectrum, poincare, safety, bifurcation and lyapunov --method pairs take both models");
-}
-
 ModelConfig load_config(const Common& c, std::optional<double> duration) {
   YAML::Node root = model_yaml(c.model);
   if (duration) {

@@ -18,10 +18,6 @@ namespace gear_dynamics::tools::analyze {
 // The model of --config, --set and --mu; `duration` (when given) replaces run.duration. Snapshot
 // times after the run are dropped: the tools do not use them.
 ModelConfig load_config(const Common& c, std::optional<double> duration = std::nullopt);
-// Throws, naming the subcommand and gear_pair.model, unless the model is the torsional one: the
-// subcommands on the dynamics layer's two-state systems (lyapunov, bifurcation) would otherwise
-// analyse the torsional model in its place.
-void require_torsional(const ModelConfig& config, const std::string& subcommand);
 
 // PREFIX_<name>.csv, opened through the report layer (its write checked when it closes) with every
 // digit of a double (17), announced on stdout.

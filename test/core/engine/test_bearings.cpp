@@ -608,3 +608,34 @@ TEST(Bearings, SharesEachPairsMuWithTheTorsionalModel) {
     }
   }
 }
+
+// The tangent flow's matrix (BearingsModel::jacobian) against central differences of derivative()
+// on each branch, at a state in contact with friction, a transmission error and its rate: the
+// field is quadratic in the state (alpha |g| times the rate), so a central difference is exact
+// but for rounding; 1e-6 of the entry's row scale allows the rounding of steps of 1e-4 of each
+// component's scale.
+TEST(Bearings, JacobianIsTheDerivativesCentralDifference) {
+  const gd::ModelConfig c = shipped();
+  const gd::GearPair g = gd::derive(bearings_inputs(c));
+  const M model(g);
+  const double b = g.in.backlash;
+  M::State y;
+  y << b + 3e-6, 0.02, 1e-8, -3e-4, -2e-7, 1e-3, -1e-8, 2e-4, 1e-7, -5e-4;
+  const gd::model_step::MeshPoint p{1.5e8, 2.0e-3, 0.03, 20000.0, 1e-7, 4e-4};
+  for (int branch : {1, -1, 0}) {
+    M::State x = y;
+    if (branch < 0) x[M::kDelta] = -b - 3e-6;
+    const M::Jacobian J = model.jacobian(branch, x, p);
+    for (int j = 0; j < M::kStates; ++j) {
+      const double step = 1e-4 * (j % 2 == 0 ? 1e-6 : 1e-3);
+      M::State up = x, down = x;
+      up[j] += step;
+      down[j] -= step;
+      const M::State column = (model.derivative(branch, up, p) - model.derivative(branch, down, p)) / (2 * step);
+      for (int i = 0; i < M::kStates; ++i) {
+        const double scale = J.row(i).cwiseAbs().maxCoeff() + 1.0;
+        EXPECT_NEAR(J(i, j), column[i], 1e-6 * scale) << "branch " << branch << ", d dy[" << i << "] / d y[" << j << "]";
+      }
+    }
+  }
+}
