@@ -81,7 +81,10 @@ geometry_msgs::WrenchStamped make_bearing_wrench(double t, const char* frame, do
 // both turned about z by -alpha_w, the working pressure angle, so that y runs along the line of
 // action from the pinion's base-circle tangent point towards the wheel's (doc/model.md §11).
 std::vector<geometry_msgs::TransformStamped> make_bearing_frames(const GearPair& gear, const ros::Time& stamp);
-// The window's statistics of a bearings run (RunResult::bearings).
+// The window's statistics of a bearings run (RunResult::bearings), over [T - W, T].
 BearingSummary make_bearing_summary(const std::string& run_name, const RunSettings& run, const BearingForces& forces);
+// The same for the window from window_start to t, stamped at t (the live node's, LiveWindowForces).
+BearingSummary make_bearing_summary(const std::string& run_name, double t, double window_start,
+                                    const BearingForces& forces);
 
 }  // namespace gear_dynamics
