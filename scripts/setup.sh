@@ -20,7 +20,7 @@ unset PYTHONPATH PYTHONHOME VIRTUAL_ENV PYENV_VERSION
 GD_PACKAGES=(
   build-essential cmake catkin python3-catkin-pkg ros-core-dev ros-message-generation
   libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
-  librosbag-dev libroslz4-dev python3-rosbag librostest-dev python3-rostest python3-rostopic python3-rosservice
+  librosbag-dev libroslz4-dev python3-rosbag librostest-dev python3-rostest python3-rostopic python3-rosservice python3-tf2-ros
   python3-rosnode python3-rosparam rosbash rosout
   libdiagnostic-updater-dev libdiagnostic-msgs-dev python3-diagnostic-msgs libstd-srvs-dev ros-std-srvs python3-std-srvs
   libros-rosgraph-msgs-dev libsensor-msgs-dev python3-sensor-msgs ros-robot-state-publisher libtf2-ros-dev libmessage-filters-dev
