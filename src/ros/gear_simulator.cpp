@@ -119,7 +119,7 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
     pinion_wrench_ = CountedPublisher::advertise<geometry_msgs::WrenchStamped>(nh_, "pinion_bearing/wrench", kQueue);
     wheel_wrench_ = CountedPublisher::advertise<geometry_msgs::WrenchStamped>(nh_, "wheel_bearing/wrench", kQueue);
     // The wrenches' frames follow the configured gear (alpha_w from pressure_angle and the profile
-    // shifts, which a URDF cannot compute): published here, latched, not in urdf/gear_pair.urdf.
+    // shifts): published here, latched, also without tf:=true, so not in the URDF (gear_pair_urdf).
     bearing_frames_msg_.transforms = make_bearing_frames(gear_, sim_stamp(0.0));
     bearing_frames_ = std::make_unique<tf2_ros::StaticTransformBroadcaster>();
     bearing_frames_->sendTransform(bearing_frames_msg_.transforms);
