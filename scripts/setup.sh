@@ -20,10 +20,10 @@ unset PYTHONPATH PYTHONHOME VIRTUAL_ENV PYENV_VERSION
 GD_PACKAGES=(
   build-essential cmake catkin python3-catkin-pkg ros-core-dev ros-message-generation
   libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure
-  librosbag-dev libroslz4-dev python3-rosbag librostest-dev python3-rostest python3-rostopic python3-rosservice
+  librosbag-dev libroslz4-dev python3-rosbag librostest-dev python3-rostest python3-rostopic python3-rosservice python3-tf2-ros
   python3-rosnode python3-rosparam rosbash rosout
   libdiagnostic-updater-dev libdiagnostic-msgs-dev python3-diagnostic-msgs libstd-srvs-dev ros-std-srvs python3-std-srvs
-  libros-rosgraph-msgs-dev libsensor-msgs-dev python3-sensor-msgs ros-robot-state-publisher libtf2-ros-dev libmessage-filters-dev
+  libros-rosgraph-msgs-dev libsensor-msgs-dev python3-sensor-msgs ros-robot-state-publisher liburdfdom-dev libtf2-ros-dev libmessage-filters-dev
   libeigen3-dev librandom123-dev libtbb-dev libyaml-cpp-dev libgtest-dev libbenchmark-dev libboost-dev libcli11-dev
   python3-matplotlib python3-numpy python3-scipy
   pybind11-dev python3-pybind11 python3-yaml python3-setuptools

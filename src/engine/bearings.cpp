@@ -123,6 +123,27 @@ std::vector<BearingsOutputSpec> bearing_force_outputs() {
   return forces;
 }
 
+BearingForceSums::BearingForceSums(int lanes)
+    : forces_(bearing_force_outputs()),
+      sum_(Eigen::ArrayXXd::Zero(static_cast<Eigen::Index>(forces_.size()), lanes)),
+      square_(sum_) {}
+
+BearingForces BearingForceSums::result(int lane) const {
+  const double n = static_cast<double>(count_);
+  BearingForces r;
+  for (std::size_t k = 0; k < forces_.size(); ++k) {
+    const auto row = static_cast<Eigen::Index>(k);
+    r.*forces_[k].window = ForceStatistics{sum_(row, lane) / n, std::sqrt(square_(row, lane) / n)};
+  }
+  return r;
+}
+
+void BearingForceSums::clear() {
+  sum_.setZero();
+  square_.setZero();
+  count_ = 0;
+}
+
 const BearingsOutputSpec* find_bearings_output(const std::string& name) {
   for (const BearingsOutputSpec& o : kBearingsOutputs)
     if (name == o.name) return &o;

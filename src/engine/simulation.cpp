@@ -9,43 +9,6 @@
 
 namespace gear_dynamics {
 
-namespace {
-
-// Sums of the bearings model's forces and of their squares over the window, per lane.
-class BearingForceSums {
- public:
-  explicit BearingForceSums(int lanes)
-      : forces_(bearing_force_outputs()),
-        sum_(Eigen::ArrayXXd::Zero(static_cast<Eigen::Index>(forces_.size()), lanes)),
-        square_(sum_) {}
-  void observe(const Ensemble& e) {
-    const model_step::MeshPoint mesh = output_mesh_point(e.mesh(), e.time());
-    for (int i = 0; i < e.lanes(); ++i) {
-      const BearingsOutputs o = bearings_outputs(e, mesh, i);
-      for (std::size_t k = 0; k < forces_.size(); ++k) {
-        const double f = o.*forces_[k].value;
-        sum_(k, i) += f;
-        square_(k, i) += f * f;
-      }
-    }
-    ++count_;
-  }
-  BearingForces result(int lane) const {
-    const double n = static_cast<double>(count_);
-    BearingForces r;
-    for (std::size_t k = 0; k < forces_.size(); ++k)
-      r.*forces_[k].window = ForceStatistics{sum_(k, lane) / n, std::sqrt(square_(k, lane) / n)};
-    return r;
-  }
-
- private:
-  std::vector<BearingsOutputSpec> forces_;
-  Eigen::ArrayXXd sum_, square_;
-  std::int64_t count_ = 0;
-};
-
-}  // namespace
-
 std::int64_t RunSettings::steps() const { return steps_for(duration); }
 
 std::int64_t RunSettings::steps_for(double t) const {
@@ -105,7 +68,10 @@ std::vector<RunResult> simulate(Ensemble& ensemble, const RunSettings& settings,
       settle_fine.observe_packet(t, p, d);
       if (ranged) range.observe_packet(p, d, Packet(Eigen::Map<const Packet>(velocity + p)));
     }
-    if (forces && n >= window_from) forces->observe(ensemble);
+    if (forces && n >= window_from) {
+      const model_step::MeshPoint mesh = output_mesh_point(ensemble.mesh(), ensemble.time());
+      forces->observe([&](int i) { return bearings_outputs(ensemble, mesh, i); });
+    }
     if (snaps.due(n)) snaps.observe(n, ensemble.delta(), ensemble.velocity(), ensemble.load());
     if (poincare) poincare->observe(n, ensemble.delta(), ensemble.velocity());
     if (n == next_record) {

@@ -8,6 +8,7 @@
 #include <numeric>
 #include <utility>
 
+#include "gear_dynamics/config/batch_settings.hpp"
 #include "gear_dynamics/engine/simulation.hpp"
 
 namespace gear_dynamics {
@@ -84,6 +85,7 @@ class BearingsLive final : public LiveModel {
     s.delta_t_dot = r_.state()[BearingsModel::kDeltaDot];
     s.bearings = o;
   }
+  std::optional<BearingsOutputs> bearings() const override { return r_.outputs(); }
 
  private:
   BearingsRealization r_;
@@ -150,7 +152,13 @@ LiveSimulation::LiveSimulation(const ModelConfig& config, const SimulatorSetting
       period_(publish_period_steps(publish_rate_, config.run.time_step)),
       window_(make_window()),
       spectrum_samples_(spectrum_.enabled() ? static_cast<std::size_t>(spectrum_.window_samples) : 0),
+      forces_from_(std::numeric_limits<std::int64_t>::max()),
       paused_(settings.paused) {
+  // The window of simulate(): the grid points from T - W to T, both included.
+  if (gear_.in.model == GearModel::kBearings && end_step_ > 0) {
+    forces_.emplace(1);
+    forces_from_ = end_step_ - config.run.steps_for(config.run.window);
+  }
   restart();
   local_.state = state_name();
   status_ = local_;
@@ -429,6 +437,7 @@ void LiveSimulation::advance() {
       model_->step();
       n = realization_.step_index();
       if (n == next_sample_) take_spectrum_sample(n);
+      if (n >= forces_from_) forces_->observe([&](int) { return *model_->bearings(); });
       const double d = model_->deflection(), v = model_->deflection_rate();
       hi_d = std::max(hi_d, d);
       lo_d = std::max(lo_d, -d);
@@ -450,6 +459,7 @@ void LiveSimulation::advance() {
   local_.steps += to - from;
   publish();
   if (to == end_step_ && !diverged_) {
+    if (forces_) report_window_forces();
     if (settings_.loop) {
       log(LiveLogLevel::Info, format("t_end = %g s reached: starting over", settings_.t_end));
       restart();
@@ -506,6 +516,19 @@ void LiveSimulation::take_spectrum_sample(std::int64_t n) {
   sink_.spectrum(w);
 }
 
+void LiveSimulation::report_window_forces() {
+  const LaneSpec& lane = realization_.lane();
+  char kind[32];
+  if (settings_.deterministic) std::snprintf(kind, sizeof kind, "_S1");
+  else std::snprintf(kind, sizeof kind, "_r%05llu", static_cast<unsigned long long>(lane.realization));
+  LiveWindowForces w;
+  w.run_name = mu_label(lane.mu) + kind;
+  w.t = settings_.t_end;
+  w.window_start = forces_from_ >= 0 ? settings_.t_end - config_.run.window : 0.0;  // the batch's T - W
+  w.forces = forces_->result();
+  sink_.window_forces(w, sample());
+}
+
 void LiveSimulation::publish() {
   LiveSample s = sample();
   if (sink_.wants_center_distance()) s.center_distance = window_.center_distance(0);
@@ -552,6 +575,10 @@ void LiveSimulation::restart() {
   spectrum_samples_.clear();
   next_sample_ = next_update_ = spectrum_.enabled() ? 0 : kNever;
   if (spectrum_.enabled()) take_spectrum_sample(0);
+  if (forces_) {
+    forces_->clear();
+    if (forces_from_ <= 0) forces_->observe([&](int) { return *model_->bearings(); });
+  }
   publish_run_info();
   publish();
 }

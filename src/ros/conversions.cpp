@@ -191,10 +191,15 @@ std::vector<geometry_msgs::TransformStamped> make_bearing_frames(const GearPair&
 }
 
 BearingSummary make_bearing_summary(const std::string& run_name, const RunSettings& run, const BearingForces& f) {
+  return make_bearing_summary(run_name, run.duration, run.duration - run.window, f);
+}
+
+BearingSummary make_bearing_summary(const std::string& run_name, double t, double window_start,
+                                    const BearingForces& f) {
   BearingSummary m;
-  m.header.stamp = sim_stamp(run.duration);
+  m.header.stamp = sim_stamp(t);
   m.run_name = run_name;
-  m.window_start = run.duration - run.window;
+  m.window_start = window_start;
   m.mesh_force_mean = f.mesh_force.mean, m.mesh_force_rms = f.mesh_force.rms;
   m.pinion_fx_mean = f.pinion_fx.mean, m.pinion_fx_rms = f.pinion_fx.rms;
   m.pinion_fy_mean = f.pinion_fy.mean, m.pinion_fy_rms = f.pinion_fy.rms;

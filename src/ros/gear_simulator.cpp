@@ -119,7 +119,7 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
     pinion_wrench_ = CountedPublisher::advertise<geometry_msgs::WrenchStamped>(nh_, "pinion_bearing/wrench", kQueue);
     wheel_wrench_ = CountedPublisher::advertise<geometry_msgs::WrenchStamped>(nh_, "wheel_bearing/wrench", kQueue);
     // The wrenches' frames follow the configured gear (alpha_w from pressure_angle and the profile
-    // shifts, which a URDF cannot compute): published here, latched, not in urdf/gear_pair.urdf.
+    // shifts): published here, latched, also without tf:=true, so not in the URDF (gear_pair_urdf).
     bearing_frames_msg_.transforms = make_bearing_frames(gear_, sim_stamp(0.0));
     bearing_frames_ = std::make_unique<tf2_ros::StaticTransformBroadcaster>();
     bearing_frames_->sendTransform(bearing_frames_msg_.transforms);
@@ -132,6 +132,9 @@ GearSimulator::GearSimulator(const ros::NodeHandle& nh, const ros::NodeHandle& p
   run_info_pub_ = nh_.advertise<RunInfo>("run_info", 1, /*latch=*/true);
   // The last state of a finite run, for late subscribers (latched, published at t_end).
   final_state_pub_ = nh_.advertise<GearState>("final_state", 1, /*latch=*/true);
+  // The bearings model's forces over the analysis window of a finite run, as the batch bags hold them.
+  if (gear_.in.model == GearModel::kBearings && settings_.t_end > 0.0)
+    bearing_summary_pub_ = nh_.advertise<BearingSummary>("bearing_summary", 1, /*latch=*/true);
   if (settings_.load_input != "sde")
     load_sub_ = nh_.subscribe("load_command", 100, &GearSimulator::load_command, this,
                               ros::TransportHints().tcpNoDelay());
@@ -588,6 +591,14 @@ void GearSimulator::finished(const LiveSample& last) {
     ROS_INFO("gear_simulator: t = %g s reached; ending (simulator.exit_at_end)", last.t);
     ros::requestShutdown();
   }
+}
+
+void GearSimulator::window_forces(const LiveWindowForces& w, const LiveSample& last) {
+  flush();  // the run's states before its summary
+  BearingSummary m = make_bearing_summary(w.run_name, w.t, w.window_start, w.forces);
+  m.header.stamp = stamp_of(last);
+  bearing_summary_pub_.publish(m);
+  record(bearing_summary_pub_.getTopic(), m.header.stamp, m);
 }
 
 void GearSimulator::idle(const LiveSample& last) {

@@ -22,6 +22,7 @@
 #include "gear_dynamics/engine/ensemble.hpp"
 #include "gear_dynamics/engine/observers.hpp"
 #include "gear_dynamics/engine/simulation.hpp"
+#include "gear_dynamics/model/gear_urdf.hpp"
 #include "cli.hpp"
 
 namespace gd = gear_dynamics;
@@ -46,6 +47,7 @@ struct Options {
   std::string output = "gear_run.csv";
   std::optional<std::string> print_parameters;
   bool check_simulator = false;
+  bool print_urdf = false;
   std::string record_dir;
   std::vector<std::string> sweeps;
 };
@@ -78,6 +80,7 @@ Options parse(int argc, char** argv) {
                  "print the Markdown table of a configuration section and exit")
       ->type_name("SECTION");
   app.add_flag("--check-simulator", o.check_simulator, "only validate the configuration as gear_simulator would");
+  app.add_flag("--print-urdf", o.print_urdf, "print the URDF of the configured gear pair and exit");
   app.add_option("--record-dir", o.record_dir, "with --check-simulator: DIR must be a writable folder")
       ->type_name("DIR");
   gd::tools::add_repeatable(app, "--sweep", o.sweeps, "run every point of a grid (repeatable: the product)")
@@ -86,6 +89,8 @@ Options parse(int argc, char** argv) {
 --check-simulator: config/simulator.yaml included; prints 'valid' and exits 0, or the problems on
   stderr and exits 1 (simulate.launch runs this while it is parsed, so a bad value ends roslaunch
   with a non-zero exit code before any node starts); --record-dir for record:=true.
+--print-urdf: config/simulator.yaml included, validated as --check-simulator does; prints the
+  gear pair's URDF at the configured gear (simulate.launch tf:=true loads it as robot_description).
 --sweep KEY=V1,V2,... or KEY=from:to:count[:log], e.g. --sweep load.sigma=0,2.5,5 or
   --sweep load.initial_mean=1:100:3:log; KEY is any scalar gear_pair/load key (doc/studies.md).
   Run names get the point, p0001_S1; a summary line per run and point.)");
@@ -116,8 +121,10 @@ int main(int argc, char** argv) try {
     print_parameters(*opt.print_parameters);
     return 0;
   }
-  YAML::Node root = gd::tools::model_yaml(opt.model, opt.check_simulator ? std::vector<std::string>{"simulator.yaml"}
-                                                                         : std::vector<std::string>{});
+  // The simulator's commands take simulate.launch's overlays, simulator keys included.
+  const bool simulator = opt.check_simulator || opt.print_urdf;
+  YAML::Node root = gd::tools::model_yaml(opt.model, simulator ? std::vector<std::string>{"simulator.yaml"}
+                                                               : std::vector<std::string>{});
   // Validated with the rest: a negative value is refused by name, not ignored.
   if (opt.seed) root["run"]["seed"] = *opt.seed;
   if (opt.check_simulator) {
@@ -134,6 +141,12 @@ int main(int argc, char** argv) try {
       return 1;
     }
     std::printf("valid\n");
+    return 0;
+  }
+  if (opt.print_urdf) {
+    const gd::ModelConfig model = gd::parse_config(root);
+    gd::parse_simulator_settings(root, model.run.time_step);
+    std::fputs(gd::gear_pair_urdf(gd::derive(model.gear)).c_str(), stdout);
     return 0;
   }
   if (const std::string notice = gd::tools::drop_late_snapshots(root); !notice.empty())

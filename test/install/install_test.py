@@ -165,14 +165,17 @@ def case_main_launch(d):
 
 
 def case_live_node(d):
-    """simulate.launch (gear_run's parse-time check, the node, at real time until stopped) publishes states."""
+    """simulate.launch tf:=true (gear_run's parse-time check and URDF, the node, at real time until
+    stopped) publishes states, and robot_description holds the gear's joints."""
     if d.installed():
         return ["not installed"]
-    script = ("roslaunch -p $PORT gear_dynamics simulate.launch & launch=$!; "
+    script = ("roslaunch -p $PORT gear_dynamics simulate.launch tf:=true & launch=$!; "
               "timeout 60 bash -c 'until rostopic echo -n 1 /gear/state/header/seq; do sleep 0.5; done'; rc=$?; "
+              "[ $rc -ne 0 ] || rosparam get /gear/robot_description | grep -q wheel_joint || rc=3; "
               "kill -INT $launch; wait $launch || true; exit $rc")
     p = d.shell(script, timeout=120)
-    return [] if p.returncode == 0 else [f"no /gear/state from the installed node (exit {p.returncode}):\n{p.stdout[-4000:]}"]
+    return [] if p.returncode == 0 else [f"no /gear/state or robot_description from the installed package "
+                                         f"(exit {p.returncode}):\n{p.stdout[-4000:]}"]
 
 
 def main():

@@ -7,9 +7,14 @@
 - over the last 8 mesh periods the wrenches' y forces average to the static mesh load m_e Phi
   (+ on the wheel's bearing, - on the pinion's), with m_e = 1/q3 computed here from the
   configuration (doc/model.md §3), and their x forces are exactly 0 (mu = 0: nothing drives x);
+- at t_end the latched /gear/bearing_summary reaches a subscriber that arrives after the run: the
+  run's name, the window [T - W, T], finite forces, and the numbers gear_run prints for the same
+  run (the batch's window sums);
 - a bad bearings key ends roslaunch naming it; a bad reconfigure value is refused at run time.
 """
 import math
+import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -20,12 +25,14 @@ import rospy
 import rostest
 import tf2_ros
 import yaml
-from gear_dynamics.msg import GearState, MeshState, RunInfo
+from gear_dynamics.msg import BearingSummary, GearState, MeshState, RunInfo
 from geometry_msgs.msg import WrenchStamped
 
 from simtest import Collector, ends_at, last_run, services
 
 T_END = 0.06  # simulator/t_end of bearings.yaml [s]
+WINDOW = 0.05  # run/window of config/run.yaml [s]
+FORCES = ('mesh_force', 'pinion_fx', 'pinion_fy', 'wheel_fx', 'wheel_fy')
 TIME_STEP = 2.5e-6  # run/time_step of config/run.yaml [s]
 
 
@@ -105,6 +112,35 @@ class Bearings(unittest.TestCase):
                                    msg='%s: mean fy %.6g N, m_e Phi = %.6g N' % (name, mean, static_force))
             # mu = 0: the x equations have no forcing and start at rest, so x stays exactly 0.
             self.assertEqual({m.wrench.force.x for m in self.msgs[name]}, {0.0}, name)
+
+    def gear_run_window_forces(self):
+        """gear_run's window means and RMS of S1 over the same run (its summary line, 6 digits)."""
+        config = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'bearings.yaml')
+        out = subprocess.run(['rosrun', 'gear_dynamics', 'gear_run', '--config', config, '--set',
+                              'run.duration=%g' % T_END, '--realizations', '0', '--rate', '0'],
+                             stdout=subprocess.PIPE, text=True, check=True, timeout=60).stdout
+        line = out[out.index('over the window'):].splitlines()[0]
+        return {name: (float(mean), float(rms))
+                for name, mean, rms in re.findall(r'(\w+) (\S+) / (\S+?)(?:,|$)', line)}
+
+    def test_bearing_summary_latched(self):
+        # A subscriber that arrives after t_end (setUpClass waited for it).
+        late = Collector('/gear/bearing_summary', BearingSummary)
+        summary = late.wait_for(len, 20.0, 'the latched bearing_summary')[-1]
+        self.assertEqual(summary.run_name, 'mu0.0000_S1')  # as a batch names S1 at mu = 0
+        self.assertEqual(summary.header.stamp, self.states[-1].header.stamp)
+        self.assertEqual(summary.window_start, T_END - WINDOW)
+        values = {f: (getattr(summary, f + '_mean'), getattr(summary, f + '_rms')) for f in FORCES}
+        for name, (mean, rms) in values.items():
+            self.assertTrue(math.isfinite(mean) and math.isfinite(rms) and rms >= abs(mean), (name, mean, rms))
+        for name in ('pinion_fx', 'wheel_fx'):
+            self.assertEqual(values[name], (0.0, 0.0))  # mu = 0: nothing across the line of action
+        self.assertGreater(values['mesh_force'][0], 0.0)
+        expected = self.gear_run_window_forces()
+        self.assertEqual(sorted(expected), sorted(FORCES))
+        for name in FORCES:
+            for got, printed in zip(values[name], expected[name]):
+                self.assertAlmostEqual(got, printed, delta=1e-5 * abs(printed), msg=name)
 
     def test_bad_key_refused(self):
         with tempfile.NamedTemporaryFile('w', suffix='.yaml') as f:

@@ -1,28 +1,53 @@
 #!/usr/bin/python3
-"""simulate.launch tf:=true, headless: gear_simulator's NS/joint_states through robot_state_publisher
-and urdf/gear_pair.urdf.
+"""simulate.launch tf:=true with joint_tf_gear.yaml (a gear other than the default), headless:
+gear_simulator's NS/joint_states through robot_state_publisher and the URDF of the configured gear.
 
+- robot_description: the pinion and the wheel drawn at the working pitch radii and the face width,
+  the wheel's axis at the working centre distance, all computed here from the run's configuration
+  (alpha_w solved by bisection on the involute function);
 - joint_states: names pinion_joint, wheel_joint; theta1 = Omega t (phi0 = 0), theta2 =
   (Rb1 theta1 - delta)/Rb2 with delta of the state at the same stamp, and their rates;
 - TF at a joint state's stamp: gear_pair -> pinion turns by theta1 about +z, gear_pair -> wheel by
-  theta2 about -z, 0.1 m away (r1 + r2), and pinion -> wheel follows both.
+  theta2 about -z, the working centre distance away, and pinion -> wheel follows both.
 """
 import math
 import sys
 import threading
 import unittest
+import xml.etree.ElementTree as ET
 
 import rospy
 import rostest
 import tf2_ros
+import yaml
 
-from gear_dynamics.msg import GearState
+from gear_dynamics.msg import GearState, RunInfo
 from sensor_msgs.msg import JointState
 from tf2_msgs.msg import TFMessage
 
-R1, R2, ALPHA0 = 0.02, 0.08, 0.3490658503988659  # config/gear_pair.yaml
-RB1, RB2 = R1 * math.cos(ALPHA0), R2 * math.cos(ALPHA0)
-OMEGA = 104.71975511965977
+
+class Gear:
+    """The drawing's and the joints' quantities of the gear_pair section (doc/model.md §3)."""
+
+    def __init__(self, g):
+        alpha0 = g['pressure_angle']
+        self.rb1 = g['pinion_pitch_radius'] * math.cos(alpha0)
+        self.rb2 = g['gear_pitch_radius'] * math.cos(alpha0)
+        self.omega = g['pinion_speed']
+        self.face_width = g['face_width']
+
+        def inv(a):
+            return math.tan(a) - a
+        target = inv(alpha0) + 2.0 * math.tan(alpha0) * (g.get('profile_shift1', 0.0) + g.get('profile_shift2', 0.0)) / (
+            g['pinion_teeth'] + g['gear_teeth'])
+        lo, hi = 0.01, 1.5
+        for _ in range(200):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if inv(mid) < target else (lo, mid)
+        alpha_w = 0.5 * (lo + hi)
+        self.rw1, self.rw2 = self.rb1 / math.cos(alpha_w), self.rb2 / math.cos(alpha_w)
+        self.centre_distance = self.rw1 + self.rw2
+        self.reference_distance = g['pinion_pitch_radius'] + g['gear_pitch_radius']
 
 
 def yaw(q):
@@ -35,6 +60,8 @@ def same_angle(a, b):
 
 class JointTf(unittest.TestCase):
     def setUp(self):
+        info = rospy.wait_for_message('/gear/run_info', RunInfo, timeout=30.0)
+        self.gear = Gear(yaml.safe_load(info.parameters_yaml)['gear_pair'])
         self.lock = threading.Lock()
         self.states, self.joints = {}, []
         self.subs = [rospy.Subscriber('/gear/state', GearState, self.on_state, queue_size=None),
@@ -60,7 +87,20 @@ class JointTf(unittest.TestCase):
         with self.lock:
             self.joints.append(m)
 
+    def test_robot_description_is_the_configured_gear(self):
+        g = self.gear
+        self.assertGreater(g.centre_distance, g.reference_distance + 1e-4)  # not the reference gear
+        robot = ET.fromstring(rospy.get_param('/gear/robot_description'))
+        for link, radius in (('pinion', g.rw1), ('wheel', g.rw2)):
+            cylinder = robot.find("link[@name='%s']/visual/geometry/cylinder" % link)
+            self.assertAlmostEqual(float(cylinder.get('radius')), radius, delta=1e-12, msg=link)
+            self.assertAlmostEqual(float(cylinder.get('length')), g.face_width, delta=1e-12, msg=link)
+        origin = robot.find("joint[@name='wheel_joint']/origin").get('xyz').split()
+        self.assertAlmostEqual(float(origin[0]), g.centre_distance, delta=1e-12)
+        self.assertEqual([float(v) for v in origin[1:]], [0.0, 0.0])
+
     def test_joint_states_and_tf_follow_the_states(self):
+        g = self.gear
         deadline = rospy.Time.now() + rospy.Duration(5.0)  # simulated time (real_time_factor 1)
         while rospy.Time.now() < deadline and not rospy.is_shutdown():
             rospy.sleep(0.1)
@@ -78,10 +118,10 @@ class JointTf(unittest.TestCase):
                 continue
             matched += 1
             theta1, theta2 = j.position
-            self.assertAlmostEqual(theta1, OMEGA * s.t, delta=1e-9 * max(1.0, theta1))
-            self.assertAlmostEqual(theta2, (RB1 * theta1 - s.delta) / RB2, delta=1e-9 * max(1.0, theta2))
-            self.assertEqual(j.velocity[0], OMEGA)
-            self.assertAlmostEqual(j.velocity[1], (RB1 * OMEGA - s.delta_dot) / RB2, delta=1e-9)
+            self.assertAlmostEqual(theta1, g.omega * s.t, delta=1e-9 * max(1.0, theta1))
+            self.assertAlmostEqual(theta2, (g.rb1 * theta1 - s.delta) / g.rb2, delta=1e-9 * max(1.0, theta2))
+            self.assertEqual(j.velocity[0], g.omega)
+            self.assertAlmostEqual(j.velocity[1], (g.rb1 * g.omega - s.delta_dot) / g.rb2, delta=1e-9)
         self.assertGreater(matched, 1000)
 
         # TF goes through KDL's rotation matrices and back to quaternions: 2e-6 rad was seen at
@@ -101,7 +141,7 @@ class JointTf(unittest.TestCase):
             self.assertLess(same_angle(yaw(wheel.transform.rotation), -theta2), tolerance)
             self.assertLess(same_angle(yaw(between.transform.rotation), -theta2 - theta1), tolerance)
             t = wheel.transform.translation
-            self.assertAlmostEqual(math.hypot(t.x, t.y), R1 + R2, places=9)
+            self.assertAlmostEqual(math.hypot(t.x, t.y), g.centre_distance, places=9)
             b = between.transform.translation  # the wheel's axis seen from the turning pinion
             self.assertLess(same_angle(math.atan2(b.y, b.x), -theta1), tolerance)
             checked += 1

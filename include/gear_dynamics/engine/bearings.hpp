@@ -191,6 +191,36 @@ std::vector<BearingsOutputSpec> bearing_force_outputs();
 // The entry named `name`, or null.
 const BearingsOutputSpec* find_bearings_output(const std::string& name);
 
+// The sums of the forces (bearing_force_outputs()) and of their squares over the grid points of the
+// analysis window, per lane: simulate()'s RunResult::bearings and the live node's bearing_summary,
+// so that both take the same sums in the same order.
+class BearingForceSums {
+ public:
+  explicit BearingForceSums(int lanes = 1);
+  // One grid point of every lane: outputs(i) gives lane i's BearingsOutputs.
+  template <class Outputs>
+  void observe(Outputs&& outputs) {
+    for (Eigen::Index i = 0; i < sum_.cols(); ++i) {
+      const BearingsOutputs o = outputs(static_cast<int>(i));
+      for (std::size_t k = 0; k < forces_.size(); ++k) {
+        const double f = o.*forces_[k].value;
+        sum_(static_cast<Eigen::Index>(k), i) += f;
+        square_(static_cast<Eigen::Index>(k), i) += f * f;
+      }
+    }
+    ++count_;
+  }
+  // The mean and RMS of lane `lane`'s forces over the points observed (at least one).
+  BearingForces result(int lane = 0) const;
+  std::int64_t count() const { return count_; }
+  void clear();
+
+ private:
+  std::vector<BearingsOutputSpec> forces_;
+  Eigen::ArrayXXd sum_, square_;
+  std::int64_t count_ = 0;
+};
+
 // Grid step n of one realization of the bearings model from y, with friction coefficient mu and the
 // load going from load0 to load1: the located segments of mesh.plan(n) (model_step::located_segment).
 // BearingsRealization's step; Ensemble's SIMD lanes give its bits. Returns the

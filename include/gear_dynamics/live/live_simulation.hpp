@@ -71,6 +71,16 @@ struct LiveRunInfo {
   LoadInput load_input;
 };
 
+// The bearings model's forces over a finite run's analysis window [t_end - W, t_end] (W =
+// run.window, or from t = 0 if t_end is shorter): what the batch's RunResult::bearings holds for
+// the same run, summed by the same BearingForceSums.
+struct LiveWindowForces {
+  std::string run_name;  // as a batch names the run: mu label and S1 or r<realization>
+  double t = 0.0;             // t_end [s]
+  double window_start = 0.0;  // t_end - W, or 0 [s]
+  BearingForces forces;
+};
+
 enum class LiveLogLevel { Debug, Info, Warn, Error };
 
 // The spectrum topic's trailing window: delta and the mesh force, the last `capacity` samples, in a
@@ -120,6 +130,9 @@ class LiveSink {
   // At t_end without loop: the last sample (already published), once per run, with its center
   // distance whatever wants_center_distance() says.
   virtual void finished(const LiveSample& /*last*/) {}
+  // At every t_end reached with the bearings model (before finished(), or before a loop starts over),
+  // with the last sample (already published).
+  virtual void window_forces(const LiveWindowForces& /*forces*/, const LiveSample& /*last*/) {}
   // Before the loop waits (pacing, idle, a stop), and after an iteration that took kMinWait or
   // more: a sink may hold what publish() handed it until then (the ROS adapter publishes a burst of states back to back: one wake-up of roscpp's
   // writer thread per burst instead of per message). Also called by iterate()'s callers as they like.
@@ -162,6 +175,8 @@ class LiveModel {
   virtual double mesh_force() const = 0;
   // The model's fields of a sample: delta, delta_dot, delta_t, delta_t_dot and the outputs.
   virtual void describe(LiveSample& s) const = 0;
+  // The bearings model's outputs of the present state; empty for a model without them.
+  virtual std::optional<BearingsOutputs> bearings() const { return std::nullopt; }
 };
 // The realization of lane `lane` of `gear`'s model (gear.in.model): the one place that dispatches on it.
 std::unique_ptr<LiveModel> make_live_model(const GearPair& gear, double time_step, const InitialState& initial,
@@ -270,6 +285,7 @@ class LiveSimulation {
   std::string state_name() const;
   WindowRange make_window() const;
   void take_spectrum_sample(std::int64_t n);
+  void report_window_forces();
   LiveSample sample() const;
   void log(LiveLogLevel level, const std::string& line) { sink_.log(level, line); }
   void loop();
@@ -293,6 +309,10 @@ class LiveSimulation {
   WindowRange window_;   // trailing-window ranges for the center distance d(t)
   SampleRing spectrum_samples_;
   std::int64_t next_sample_, next_update_;  // grid steps; never reached without the spectrum topic
+  // The bearings model's window sums of a finite run, from grid step forces_from_ (never reached
+  // otherwise) to t_end.
+  std::optional<BearingForceSums> forces_;
+  std::int64_t forces_from_;
   bool paused_, finished_ = false, diverged_ = false;
   std::string divergence_;
   bool anchored_ = false;  // pacing restarts from (anchor_wall_, anchor_step_) when false

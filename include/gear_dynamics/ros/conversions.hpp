@@ -76,12 +76,15 @@ RunSummary make_summary(const std::string& run_name, RunKind kind,
 MeshState make_mesh_state(double t, const BearingsOutputs& outputs, double delta_t);
 geometry_msgs::WrenchStamped make_bearing_wrench(double t, const char* frame, double fx, double fy);
 // The frames the bearing forces are given in, as static transforms from the frame gear_pair of
-// urdf/gear_pair.urdf (the pinion's axis, x towards the wheel's): pinion_bearing at the pinion's axis,
+// the URDF (model/gear_urdf.hpp: the pinion's axis, x towards the wheel's): pinion_bearing at the pinion's axis,
 // wheel_bearing at the wheel's, the working centre distance a_w = (Rb1 + Rb2)/cos(alpha_w) away,
 // both turned about z by -alpha_w, the working pressure angle, so that y runs along the line of
 // action from the pinion's base-circle tangent point towards the wheel's (doc/model.md §11).
 std::vector<geometry_msgs::TransformStamped> make_bearing_frames(const GearPair& gear, const ros::Time& stamp);
-// The window's statistics of a bearings run (RunResult::bearings).
+// The window's statistics of a bearings run (RunResult::bearings), over [T - W, T].
 BearingSummary make_bearing_summary(const std::string& run_name, const RunSettings& run, const BearingForces& forces);
+// The same for the window from window_start to t, stamped at t (the live node's, LiveWindowForces).
+BearingSummary make_bearing_summary(const std::string& run_name, double t, double window_start,
+                                    const BearingForces& forces);
 
 }  // namespace gear_dynamics

@@ -90,6 +90,7 @@ class GearSimulator : private LiveSink {
   void log(LiveLogLevel level, const std::string& line) override;
   void idle(const LiveSample& last) override;
   void finished(const LiveSample& last) override;
+  void window_forces(const LiveWindowForces& forces, const LiveSample& last) override;
   bool wants_center_distance() const override;
   void flush() override;  // publishes the held burst, and it as one state_batch (stepping thread)
   // Holds the messages of `s` for the topics that want them; into the bag with `record_it`.
@@ -200,6 +201,7 @@ class GearSimulator : private LiveSink {
   std::unique_ptr<tf2_ros::StaticTransformBroadcaster> bearing_frames_;
   tf2_msgs::TFMessage bearing_frames_msg_;  // what it sent, for the head of every bag
   ros::Publisher clock_pub_, run_info_pub_, final_state_pub_;
+  ros::Publisher bearing_summary_pub_;  // bearings model with t_end > 0: latched, at every t_end
   ros::Subscriber load_sub_;
   ros::ServiceServer pause_srv_, unpause_srv_, reset_srv_, step_srv_;
   boost::recursive_mutex reconfigure_mutex_;

@@ -1,15 +1,19 @@
 // The live loop with gear_pair.model: bearings (LiveModel, doc/architecture.md §2): its published
 // samples are BearingsRealization's states stepped directly, bit for bit (the same bearings_step,
 // the same random stream), also across a run-time change of mu and a reset; the torsional model's
-// samples carry no bearings outputs and delta_t = delta.
+// samples carry no bearings outputs and delta_t = delta. At t_end its window forces are the batch's
+// (simulate()'s RunResult::bearings) for the same run, bit for bit.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
 #include "gear_dynamics/config/config.hpp"
 #include "gear_dynamics/config/simulator_settings.hpp"
 #include "gear_dynamics/engine/bearings.hpp"
+#include "gear_dynamics/engine/ensemble.hpp"
+#include "gear_dynamics/engine/simulation.hpp"
 #include "gear_dynamics/live/live_simulation.hpp"
 
 namespace gd = gear_dynamics;
@@ -41,6 +45,39 @@ struct RecordingSink : gd::LiveSink {
   void run_info(const gd::LiveRunInfo&) override {}
   void log(gd::LiveLogLevel, const std::string&) override {}
 };
+
+// Also keeps what the live loop reports at every t_end.
+struct WindowSink : RecordingSink {
+  std::vector<gd::LiveWindowForces> windows;
+  std::vector<std::int64_t> steps;  // the last sample's step at each report
+  void window_forces(const gd::LiveWindowForces& w, const gd::LiveSample& last) override {
+    windows.push_back(w);
+    steps.push_back(last.step);
+  }
+};
+
+void expect_forces_equal(const gd::BearingForces& a, const gd::BearingForces& b) {
+  for (const gd::BearingsOutputSpec& s : gd::bearing_force_outputs()) {
+    SCOPED_TRACE(s.name);
+    EXPECT_EQ((a.*s.window).mean, (b.*s.window).mean);
+    EXPECT_EQ((a.*s.window).rms, (b.*s.window).rms);
+  }
+}
+
+// The batch's window forces of the run the live node makes of `l`: a run of duration t_end, with its
+// window cut to t_end when t_end is the shorter.
+gd::BearingForces batch_forces(const Loaded& l) {
+  gd::RunSettings run = l.model.run;
+  run.duration = l.sim.t_end;
+  run.window = std::min(run.window, run.duration);
+  const gd::LaneSpec lane = l.sim.deterministic
+                                ? gd::deterministic_lane(l.model, l.model.friction_coefficient)
+                                : gd::stochastic_lane(l.model, l.model.friction_coefficient, l.sim.realization);
+  gd::Ensemble ensemble(gd::derive(l.model.gear), run.time_step, l.model.initial, {lane}, l.model.seed);
+  const std::vector<gd::RunResult> results = gd::simulate(ensemble, run, gd::Recorder{});
+  EXPECT_TRUE(results.at(0).bearings.has_value());
+  return results.at(0).bearings.value_or(gd::BearingForces{});
+}
 
 void run_until_stopped(gd::LiveSimulation& sim) {
   for (int i = 0; i < 100000; ++i)
@@ -152,4 +189,63 @@ TEST(LiveBearings, DivergenceStopsWithTheModelsMessage) {
   EXPECT_EQ(sink.samples.size(), 1u);  // only t = 0: nothing non-finite went out
   EXPECT_NE(sim.status().divergence.find("gear model (bearings) diverged"), std::string::npos)
       << sim.status().divergence;
+}
+
+TEST(LiveBearings, WindowForcesAtTEndAreTheBatchRuns) {
+  // A stochastic run with reversing friction over [0.01, 0.06] s (W = 0.05 s), S1 at another mu, and
+  // a run shorter than W, whose window starts at t = 0 (the batch's window = T).
+  struct Case {
+    const char* overlay;
+    const char* name;
+    double window_start;
+  };
+  const Case cases[] = {
+      {"gear_pair: {model: bearings, friction_direction: reversing}\nsimulator: {t_end: 0.06, realization: 3}",
+       "mu0.0400_r00003", 0.06 - 0.05},
+      {"gear_pair: {model: bearings, friction_coefficient: 0.1}\nsimulator: {t_end: 0.06, deterministic: true}",
+       "mu0.1000_S1", 0.06 - 0.05},
+      {"gear_pair: {model: bearings}\nsimulator: {t_end: 0.02}", "mu0.0400_r00000", 0.0},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.overlay);
+    const Loaded l = load(c.overlay);
+    WindowSink sink;
+    gd::LiveSimulation sim(l.model, l.sim, sink);
+    run_until_stopped(sim);
+    ASSERT_TRUE(sim.finished());
+    ASSERT_EQ(sink.windows.size(), 1u);
+    const gd::LiveWindowForces& w = sink.windows[0];
+    EXPECT_EQ(sink.steps[0], sim.end_step());
+    EXPECT_EQ(w.run_name, c.name);
+    EXPECT_EQ(w.t, l.sim.t_end);
+    EXPECT_EQ(w.window_start, c.window_start);
+    expect_forces_equal(w.forces, batch_forces(l));
+    EXPECT_GT(w.forces.mesh_force.mean, 0.0);  // a loaded run, not zeros on both sides
+  }
+}
+
+TEST(LiveBearings, WindowForcesRepeatAfterLoopAndReset) {
+  // Each pass of a loop, and a run after ~reset, sums its own window only.
+  const Loaded l = load("gear_pair: {model: bearings}\nsimulator: {t_end: 0.02, loop: true}");
+  WindowSink sink;
+  gd::LiveSimulation sim(l.model, l.sim, sink);
+  while (sink.windows.size() < 2) sim.iterate();
+  gd::LiveSimulation::Request q;
+  q.reset = true;
+  sim.post(q);
+  while (sink.windows.size() < 3) sim.iterate();
+  const gd::BearingForces batch = batch_forces(l);
+  for (const gd::LiveWindowForces& w : sink.windows) expect_forces_equal(w.forces, batch);
+}
+
+TEST(LiveBearings, NoWindowForcesWithoutTEndOrBearings) {
+  for (const char* overlay : {"gear_pair: {model: bearings}\nsimulator: {t_end: 0.0}", "simulator: {t_end: 0.01}"}) {
+    SCOPED_TRACE(overlay);
+    const Loaded l = load(overlay);
+    WindowSink sink;
+    gd::LiveSimulation sim(l.model, l.sim, sink);
+    for (int i = 0; i < 60; ++i) sim.iterate();  // past 0.01 s
+    EXPECT_GE(sink.samples.back().t, 0.01);
+    EXPECT_TRUE(sink.windows.empty());
+  }
 }
