@@ -12,6 +12,20 @@
 
 namespace gear_dynamics::tools::analyze {
 
+const BearingsOutputSpec* signal_output(const std::string& signal, GearModel model) {
+  if (signal == "mesh_force") return nullptr;
+  const BearingsOutputSpec* output = find_bearings_output(signal);
+  if (model == GearModel::kBearings && output) return output;
+  std::string allowed = "mesh_force";
+  if (model == GearModel::kBearings)
+    for (const BearingsOutputSpec& o : kBearingsOutputs)
+      if (std::string(o.name) != "mesh_force") allowed += std::string(", ") + o.name;
+  throw std::runtime_error("--signal " + signal + " is not an output of the " +
+                           (model == GearModel::kBearings ? "bearings" : "torsional") +
+                           " model (gear_pair.model); allowed: " + allowed +
+                           (output ? " (the bearing outputs need gear_pair.model = bearings)" : ""));
+}
+
 ModelConfig load_config(const Common& c, std::optional<double> duration) {
   YAML::Node root = model_yaml(c.model);
   if (duration) {

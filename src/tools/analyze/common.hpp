@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "gear_dynamics/config/config.hpp"
+#include "gear_dynamics/engine/bearings.hpp"
 #include "gear_dynamics/report/report_file.hpp"
 #include "gear_dynamics/ros/live_bag.hpp"
 #include "subcommand.hpp"
@@ -18,6 +19,10 @@ namespace gear_dynamics::tools::analyze {
 // The model of --config, --set and --mu; `duration` (when given) replaces run.duration. Snapshot
 // times after the run are dropped: the tools do not use them.
 ModelConfig load_config(const Common& c, std::optional<double> duration = std::nullopt);
+
+// The output a --signal names beyond the mesh force: an entry of kBearingsOutputs for the bearings
+// model; null for mesh_force (either model). Throws naming the allowed names otherwise.
+const BearingsOutputSpec* signal_output(const std::string& signal, GearModel model);
 
 // PREFIX_<name>.csv, opened through the report layer (its write checked when it closes) with every
 // digit of a double (17), announced on stdout.

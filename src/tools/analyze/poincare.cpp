@@ -47,8 +47,6 @@ class Poincare : public Subcommand {
   int run(const Common& c) override { return bag_.empty() ? simulate(c) : from_bag(c); }
 
  private:
-  // The bearings model's output --signal names; null for the mesh force. Throws naming the allowed names.
-  const BearingsOutputSpec* signal_output(GearModel model) const;
   // A section's points as rows: the state's (delta, delta_dot) and the signal at each point's time.
   std::vector<SectionRow> rows(const std::vector<SectionState>& points, const GearPair& gear,
                                const MeshSchedule& mesh, const BearingsModel* bearings) const;
@@ -63,25 +61,11 @@ class Poincare : public Subcommand {
   std::string bag_;
 };
 
-const BearingsOutputSpec* Poincare::signal_output(GearModel model) const {
-  if (signal_.empty() || (signal_ == "mesh_force" && model == GearModel::kTorsional)) return nullptr;
-  const BearingsOutputSpec* output = find_bearings_output(signal_);
-  if (model == GearModel::kBearings && output) return output;
-  std::string allowed = "mesh_force";
-  if (model == GearModel::kBearings)
-    for (const BearingsOutputSpec& o : kBearingsOutputs)
-      if (std::string(o.name) != "mesh_force") allowed += std::string(", ") + o.name;
-  throw std::runtime_error("--signal " + signal_ + " is not an output of the " +
-                           (model == GearModel::kBearings ? "bearings" : "torsional") +
-                           " model (gear_pair.model); allowed: " + allowed +
-                           (output ? " (the bearing outputs need gear_pair.model = bearings)" : ""));
-}
-
 // The schedule's K, e and e_dot at the point's time: at a stiffness switch, the value after it
 // (the schedule's value at t), the same in every period.
 std::vector<SectionRow> Poincare::rows(const std::vector<SectionState>& points, const GearPair& gear,
                                        const MeshSchedule& mesh, const BearingsModel* bearings) const {
-  const BearingsOutputSpec* output = signal_output(gear.in.model);
+  const BearingsOutputSpec* output = signal_.empty() ? nullptr : signal_output(signal_, gear.in.model);
   std::vector<SectionRow> out;
   out.reserve(points.size());
   for (const SectionState& p : points) {
@@ -89,7 +73,7 @@ std::vector<SectionRow> Poincare::rows(const std::vector<SectionState>& points, 
     if (bearings) {
       const BearingsModel::State y = Eigen::Map<const BearingsModel::State>(p.x.data());
       const BearingsOutputs o = bearings_outputs(*bearings, gear, m, y);
-      out.push_back({o.delta_m, o.delta_m_dot, output ? o.*output->value : 0.0});
+      out.push_back({o.delta_m, o.delta_m_dot, output ? o.*output->value : o.mesh_force});
     } else {
       out.push_back({p.x[0], p.x[1], signal_.empty() ? 0.0
                                                       : mesh_force(gear, m.stiffness, p.x[0], p.x[1], m.error,
@@ -101,7 +85,7 @@ std::vector<SectionRow> Poincare::rows(const std::vector<SectionState>& points, 
 
 int Poincare::simulate(const Common& c) const {
   const ModelConfig cfg = load_config(c, duration_);
-  signal_output(cfg.gear.model);  // refuses a bad --signal before anything runs
+  if (!signal_.empty()) signal_output(signal_, cfg.gear.model);  // refuses a bad --signal before anything runs
   const bool bearings = cfg.gear.model == GearModel::kBearings;
   const GearPair g = derive(cfg.gear);
   const int P = phases_, R = realizations_;

@@ -62,8 +62,6 @@ class Spectrum : public Subcommand {
   }
 
  private:
-  // The bearings model's output --signal names; null for the mesh force. Throws naming the allowed names.
-  const BearingsOutputSpec* second_signal(GearModel model) const;
   SpectrumInput simulate(const Common& c) const;
   SpectrumInput from_bag(const Common& c) const;
   // Default segment: 30 mesh periods, so that every mesh harmonic falls on a bin centre. With a
@@ -93,23 +91,9 @@ class Spectrum : public Subcommand {
   std::string bag_;
 };
 
-const BearingsOutputSpec* Spectrum::second_signal(GearModel model) const {
-  if (signal_ == "mesh_force") return nullptr;
-  const BearingsOutputSpec* output = find_bearings_output(signal_);
-  if (model == GearModel::kBearings && output) return output;
-  std::string allowed = "mesh_force";
-  if (model == GearModel::kBearings)
-    for (const BearingsOutputSpec& o : kBearingsOutputs)
-      if (std::string(o.name) != "mesh_force") allowed += std::string(", ") + o.name;
-  throw std::runtime_error("--signal " + signal_ + " is not an output of the " +
-                           (model == GearModel::kBearings ? "bearings" : "torsional") +
-                           " model (gear_pair.model); allowed: " + allowed +
-                           (output ? " (the bearing outputs need gear_pair.model = bearings)" : ""));
-}
-
 SpectrumInput Spectrum::simulate(const Common& c) const {
   const ModelConfig cfg = load_config(c, duration_);
-  const BearingsOutputSpec* output = second_signal(cfg.gear.model);
+  const BearingsOutputSpec* output = signal_output(signal_, cfg.gear.model);
   const GearPair g = derive(cfg.gear);
   const int R = realizations_;
   const double transient = transient_, h = cfg.run.time_step;
