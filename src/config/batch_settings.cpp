@@ -32,6 +32,20 @@ std::string mu_label(double mu) {
   return buf;
 }
 
+std::string s1_run_label(double mu) { return mu_label(mu) + "_S1"; }
+
+std::string phase_run_label(double mu, std::uint64_t phase) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "_phase%02llu", static_cast<unsigned long long>(phase));
+  return mu_label(mu) + buf;
+}
+
+std::string realization_run_label(double mu, std::uint64_t realization) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "_r%05llu", static_cast<unsigned long long>(realization));
+  return mu_label(mu) + buf;
+}
+
 // At most this many shards; shard_index lies below shard_count.
 constexpr double kMaxShards = 1e6;
 

@@ -518,11 +518,8 @@ void LiveSimulation::take_spectrum_sample(std::int64_t n) {
 
 void LiveSimulation::report_window_forces() {
   const LaneSpec& lane = realization_.lane();
-  char kind[32];
-  if (settings_.deterministic) std::snprintf(kind, sizeof kind, "_S1");
-  else std::snprintf(kind, sizeof kind, "_r%05llu", static_cast<unsigned long long>(lane.realization));
   LiveWindowForces w;
-  w.run_name = mu_label(lane.mu) + kind;
+  w.run_name = settings_.deterministic ? s1_run_label(lane.mu) : realization_run_label(lane.mu, lane.realization);
   w.t = settings_.t_end;
   w.window_start = forces_from_ >= 0 ? settings_.t_end - config_.run.window : 0.0;  // the batch's T - W
   w.forces = forces_->result();

@@ -19,16 +19,11 @@ namespace gear_dynamics {
 namespace {
 
 std::string run_name(const Study& study, std::size_t point, double mu, RunKind kind, std::uint32_t index) {
-  char buf[32];
-  std::string prefix = mu_label(mu);
-  if (study.swept()) {
-    std::snprintf(buf, sizeof buf, "p%04zu_", point);
-    prefix = buf + prefix;
-  }
-  if (kind == RunKind::S1) return prefix + "_S1";
-  if (kind == RunKind::Phase) std::snprintf(buf, sizeof buf, "_phase%02u", index);
-  else std::snprintf(buf, sizeof buf, "_r%05u", index);
-  return prefix + buf;
+  char prefix[16] = "";
+  if (study.swept()) std::snprintf(prefix, sizeof prefix, "p%04zu_", point);
+  if (kind == RunKind::S1) return prefix + s1_run_label(mu);
+  if (kind == RunKind::Phase) return prefix + phase_run_label(mu, index);
+  return prefix + realization_run_label(mu, index);
 }
 
 }  // namespace

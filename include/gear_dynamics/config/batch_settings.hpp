@@ -40,5 +40,10 @@ YAML::Node content_yaml(const BatchSettings& settings);
 
 // "mu0.0400": the friction coefficient as it starts every run name of a batch (4 decimals).
 std::string mu_label(double mu);
+// A run's name in a batch folder after a study point's prefix: the mu label, then _S1, _phaseNN or
+// _rNNNNN (the batch's bags, and the live node's bearing_summary of the same run).
+std::string s1_run_label(double mu);
+std::string phase_run_label(double mu, std::uint64_t phase);
+std::string realization_run_label(double mu, std::uint64_t realization);
 
 }  // namespace gear_dynamics
